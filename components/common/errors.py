@@ -1,0 +1,38 @@
+"""One exception hierarchy for sonotrack.
+
+Every error subclasses :class:`SonotrackError` and a builtin, so callers can catch either.
+Messages name the file, component, port or field, the bad value and the valid choices.
+"""
+
+__all__ = [
+    "SonotrackError",
+    "ParameterError",
+    "InputError",
+    "ConfigError",
+    "BuildError",
+    "SimulationError",
+]
+
+
+class SonotrackError(Exception):
+    """Base class of every sonotrack error."""
+
+
+class ParameterError(SonotrackError, ValueError):
+    """A model parameter is out of its valid range or of the wrong kind."""
+
+
+class InputError(SonotrackError, ValueError):
+    """A port input is not finite or outside its physical range."""
+
+
+class ConfigError(SonotrackError, ValueError):
+    """A scenario, system description or command-line value is invalid."""
+
+
+class BuildError(SonotrackError, RuntimeError):
+    """An FMU could not be built or post-processed."""
+
+
+class SimulationError(SonotrackError, RuntimeError):
+    """A co-simulation stopped because an FMU reported an error or discard."""

@@ -1,0 +1,238 @@
+"""The shared pythonfmu base class of every sonotrack FMU.
+
+pythonfmu 0.7.0 declares no units, no InitialUnknowns, gives Integer and Boolean variables an
+illegal continuous variability and saves only registered variables in the FMU state. This
+module closes those gaps once for every FMU: slaves declare ports with a unit, a description
+and their direct dependencies through :class:`SonotrackSlave`, whose :meth:`to_xml` writes a
+compliant modelDescription.xml, and whose state hooks save the model core in full.
+"""
+
+import math
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
+from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
+
+from .state import restore, snapshot
+
+__all__ = ["SonotrackSlave", "DefaultExperiment", "Fmi2Status", "UNIT_BASES"]
+
+# SI base-unit exponents of every unit a sonotrack port may carry (FMI 2.0 BaseUnit attributes).
+UNIT_BASES = {
+    "1": {},
+    "m": {"m": 1},
+    "m2": {"m": 2},
+    "s": {"s": 1},
+    "Hz": {"s": -1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "1/m": {"m": -1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "kg": {"kg": 1},
+    "kg.m2": {"kg": 1, "m": 2},
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
+    "A": {"A": 1},
+    "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
+    "N.m/A": {"kg": 1, "m": 2, "s": -2, "A": -1},
+    "V.s/rad": {"kg": 1, "m": 2, "s": -2, "A": -1, "rad": -1},
+    "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
+    "1/V": {"kg": -1, "m": -2, "s": 3, "A": 1},
+    "1/(m/s)": {"m": -1, "s": 1},
+    "1/(m/s2)": {"m": -1, "s": 2},
+    "V/(m/s)": {"kg": 1, "m": 1, "s": -2, "A": -1},
+    "V.s/m": {"kg": 1, "m": 1, "s": -2, "A": -1},
+    "V.s2/m": {"kg": 1, "m": 1, "s": -1, "A": -1},
+    "V/m": {"kg": 1, "m": 1, "s": -3, "A": -1},
+    "dB": {},
+    "deg": {"rad": 1},
+}
+
+_KIND = {Real: "Real", Integer: "Integer", Boolean: "Boolean", String: "String"}
+
+
+class SonotrackSlave(Fmi2Slave):
+    """Base of every sonotrack slave: typed, unit-annotated ports and complete state.
+
+    A slave sets each port's attribute, declares it with one of the ``input_*``, ``output_*``
+    or ``parameter_*`` methods, builds its core in :meth:`exit_initialization_mode` and calls
+    it in ``do_step``. Attributes named in ``hidden_state`` (default: ``core``) are saved and
+    restored with the FMU state, in full.
+    """
+
+    hidden_state = ("core",)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._units = {}
+        self._dependencies = {}
+        self._logged_once = set()
+
+    # ----- port declarations -------------------------------------------------------------
+    def _declare(self, kind, name, causality, description, unit=None, depends_on=None):
+        if causality == Fmi2Causality.parameter:
+            variability = Fmi2Variability.fixed
+            initial = Fmi2Initial.exact
+        elif kind in (Integer, Boolean, String):
+            variability = Fmi2Variability.discrete
+            initial = Fmi2Initial.calculated if causality == Fmi2Causality.output else None
+        else:
+            variability = Fmi2Variability.continuous
+            initial = Fmi2Initial.calculated if causality == Fmi2Causality.output else None
+        if kind is Real:
+            if unit not in UNIT_BASES:
+                raise ValueError(f"port {name!r}: unit {unit!r} is not one of {sorted(UNIT_BASES)}")
+            self._units[name] = unit
+        variable = kind(name, causality=causality, description=description,
+                        variability=variability, initial=initial)
+        self.register_variable(variable)
+        if causality == Fmi2Causality.output:
+            self._dependencies[name] = tuple(depends_on or ())
+
+    def input_real(self, name, unit, description):
+        """Declare a Real input with its SI unit."""
+        self._declare(Real, name, Fmi2Causality.input, description, unit)
+
+    def input_integer(self, name, description):
+        """Declare a discrete Integer input."""
+        self._declare(Integer, name, Fmi2Causality.input, description)
+
+    def input_boolean(self, name, description):
+        """Declare a discrete Boolean input."""
+        self._declare(Boolean, name, Fmi2Causality.input, description)
+
+    def output_real(self, name, unit, description, depends_on=()):
+        """Declare a Real output; ``depends_on`` names the inputs it feeds through directly."""
+        self._declare(Real, name, Fmi2Causality.output, description, unit, depends_on)
+
+    def output_integer(self, name, description, depends_on=()):
+        """Declare a discrete Integer output."""
+        self._declare(Integer, name, Fmi2Causality.output, description, None, depends_on)
+
+    def output_boolean(self, name, description, depends_on=()):
+        """Declare a discrete Boolean output."""
+        self._declare(Boolean, name, Fmi2Causality.output, description, None, depends_on)
+
+    def parameter_real(self, name, unit, description):
+        """Declare a fixed Real parameter with its SI unit."""
+        self._declare(Real, name, Fmi2Causality.parameter, description, unit)
+
+    def parameter_integer(self, name, description):
+        """Declare a fixed Integer parameter."""
+        self._declare(Integer, name, Fmi2Causality.parameter, description)
+
+    def parameter_boolean(self, name, description):
+        """Declare a fixed Boolean parameter."""
+        self._declare(Boolean, name, Fmi2Causality.parameter, description)
+
+    def parameter_string(self, name, description):
+        """Declare a fixed String parameter (a mode or a file name)."""
+        self._declare(String, name, Fmi2Causality.parameter, description)
+
+    # ----- refusing bad input ----------------------------------------------------------------
+    def refuse(self, port, value, reason):
+        """Log why an input is refused with an error status; ``do_step`` then returns False.
+
+        pythonfmu turns an exception in ``do_step`` into fmi2Fatal; returning False gives the
+        host fmi2Discard, and the logged line names the port and value.
+        """
+        self.log(f"{self.instance_name}: input {port} = {value!r} refused: {reason}",
+                 Fmi2Status.error)
+        return False
+
+    def first_non_finite(self, ports):
+        """Return the name of the first port among ``ports`` whose value is NaN or inf, or None."""
+        for port in ports:
+            value = getattr(self, port)
+            if not math.isfinite(value):
+                return port
+        return None
+
+    def log_once(self, key, message, status=Fmi2Status.warning):
+        """Log ``message`` the first time ``key`` is seen in this instance."""
+        if key not in self._logged_once:
+            self._logged_once.add(key)
+            self.log(f"{self.instance_name}: {message}", status)
+
+    # ----- complete FMU state ----------------------------------------------------------------
+    def _get_fmu_state(self):
+        state = super()._get_fmu_state()
+        state["__hidden__"] = {name: snapshot(getattr(self, name, None))
+                               for name in self.hidden_state}
+        state["__logged_once__"] = sorted(self._logged_once)
+        return state
+
+    def _set_fmu_state(self, state):
+        state = dict(state)
+        hidden = state.pop("__hidden__", {})
+        self._logged_once = set(state.pop("__logged_once__", []))
+        super()._set_fmu_state(state)
+        for name, saved in hidden.items():
+            current = getattr(self, name, None)
+            if isinstance(saved, dict) and "__object__" in saved and current is not None:
+                restore(current, saved)
+            elif isinstance(saved, dict) and "__object__" in saved:
+                raise RuntimeError(f"{self.instance_name}: cannot restore {name} before it exists")
+            else:
+                setattr(self, name, saved)
+
+    # ----- compliant modelDescription.xml ------------------------------------------------------
+    def to_xml(self, model_options=dict()):
+        """Return pythonfmu's model description with units, variabilities and ModelStructure fixed."""
+        root = super().to_xml(model_options)
+        self._add_unit_definitions(root)
+        variables = list(self.vars.values())
+        index = {v.name: i + 1 for i, v in enumerate(variables)}
+        for node, variable in zip(root.find("ModelVariables"), variables):
+            unit = self._units.get(variable.name)
+            if unit is not None:
+                node.find("Real").set("unit", unit)
+        self._write_model_structure(root, variables, index)
+        return root
+
+    def _add_unit_definitions(self, root):
+        used = sorted(set(self._units.values()))
+        if not used:
+            return
+        definitions = Element("UnitDefinitions")
+        for unit in used:
+            unit_node = SubElement(definitions, "Unit", {"name": unit})
+            bases = UNIT_BASES[unit]
+            attributes = {k: str(v) for k, v in bases.items()}
+            if unit == "deg":
+                attributes["factor"] = repr(math.pi / 180.0)
+            SubElement(unit_node, "BaseUnit", attributes)
+        position = list(root).index(root.find("CoSimulation")) + 1
+        root.insert(position, definitions)
+
+    def _write_model_structure(self, root, variables, index):
+        old = root.find("ModelStructure")
+        root.remove(old)
+        structure = SubElement(root, "ModelStructure")
+        outputs = [v for v in variables if v.causality == Fmi2Causality.output]
+        if not outputs:
+            return
+        parameters = [v.name for v in variables if v.causality == Fmi2Causality.parameter]
+        outputs_node = SubElement(structure, "Outputs")
+        initial_node = SubElement(structure, "InitialUnknowns")
+        for variable in outputs:
+            inputs = self._dependencies[variable.name]
+            unknown = [name for name in inputs if name not in index]
+            if unknown:
+                raise ValueError(f"output {variable.name!r} depends on unknown ports {unknown}")
+            direct = " ".join(str(index[name]) for name in inputs)
+            SubElement(outputs_node, "Unknown", {
+                "index": str(index[variable.name]),
+                "dependencies": direct,
+                "dependenciesKind": " ".join("dependent" for _ in inputs),
+            })
+            # At initialisation an output may depend on its direct inputs and on any parameter.
+            at_init = list(inputs) + parameters
+            SubElement(initial_node, "Unknown", {
+                "index": str(index[variable.name]),
+                "dependencies": " ".join(str(index[name]) for name in at_init),
+                "dependenciesKind": " ".join("dependent" for _ in at_init),
+            })

@@ -1,0 +1,100 @@
+"""JSON-safe snapshots of a model core's complete internal state.
+
+pythonfmu saves only registered variables and serialises with JSON. A core keeps its state in
+plain attributes (floats, ints, bools, strings, lists, dicts, numpy arrays, numpy random
+generators, nested objects); :func:`snapshot` turns such an object into JSON-safe data and
+:func:`restore` writes it back in place, bit for bit (floats go through ``repr``, which
+round-trips exactly).
+"""
+
+import numpy as np
+
+__all__ = ["snapshot", "restore"]
+
+_ARRAY = "__ndarray__"
+_GENERATOR = "__generator__"
+_OBJECT = "__object__"
+_TUPLE = "__tuple__"
+
+
+def snapshot(value):
+    """Return a JSON-safe deep copy of ``value``.
+
+    Parameters
+    ----------
+    value : object
+        A scalar, container, numpy array or generator, or an object whose ``__dict__`` holds those.
+
+    Returns
+    -------
+    object
+        Nested dicts and lists of JSON scalars, with type tags where needed to rebuild.
+    """
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, (int, np.integer)) and not isinstance(value, np.bool_):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value)
+    if isinstance(value, np.ndarray):
+        return {_ARRAY: value.tolist(), "dtype": value.dtype.str, "shape": list(value.shape)}
+    if isinstance(value, np.random.Generator):
+        return {_GENERATOR: _plain(value.bit_generator.state)}
+    if isinstance(value, tuple):
+        return {_TUPLE: [snapshot(v) for v in value]}
+    if isinstance(value, list):
+        return [snapshot(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): snapshot(v) for k, v in value.items()}
+    if hasattr(value, "__dict__"):
+        return {_OBJECT: {k: snapshot(v) for k, v in vars(value).items() if not callable(v)}}
+    raise TypeError(f"cannot snapshot a value of type {type(value).__name__}")
+
+
+def restore(target, saved):
+    """Write a :func:`snapshot` of an object back into ``target`` in place.
+
+    Parameters
+    ----------
+    target : object
+        The object the snapshot was taken from (or one of the same class).
+    saved : dict
+        The value :func:`snapshot` returned for it.
+    """
+    for name, value in saved[_OBJECT].items():
+        current = getattr(target, name, None)
+        setattr(target, name, _rebuild(value, current))
+
+
+def _rebuild(saved, current):
+    if isinstance(saved, list):
+        return [_rebuild(v, None) for v in saved]
+    if not isinstance(saved, dict):
+        return saved
+    if _ARRAY in saved:
+        return np.array(saved[_ARRAY], dtype=np.dtype(saved["dtype"])).reshape(saved["shape"])
+    if _GENERATOR in saved:
+        generator = current if isinstance(current, np.random.Generator) else np.random.default_rng()
+        generator.bit_generator.state = saved[_GENERATOR]
+        return generator
+    if _TUPLE in saved:
+        return tuple(_rebuild(v, None) for v in saved[_TUPLE])
+    if _OBJECT in saved:
+        if current is None or not hasattr(current, "__dict__"):
+            raise TypeError("cannot restore a nested object without an instance to restore into")
+        restore(current, saved)
+        return current
+    return {k: _rebuild(v, current.get(k) if isinstance(current, dict) else None)
+            for k, v in saved.items()}
+
+
+def _plain(value):
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
