@@ -223,16 +223,17 @@ class SonotrackSlave(Fmi2Slave):
             unknown = [name for name in inputs if name not in index]
             if unknown:
                 raise ValueError(f"output {variable.name!r} depends on unknown ports {unknown}")
-            direct = " ".join(str(index[name]) for name in inputs)
-            SubElement(outputs_node, "Unknown", {
-                "index": str(index[variable.name]),
-                "dependencies": direct,
-                "dependenciesKind": " ".join("dependent" for _ in inputs),
-            })
+            direct = sorted(index[name] for name in inputs)
+            SubElement(outputs_node, "Unknown", _unknown(index[variable.name], direct))
             # At initialisation an output may depend on its direct inputs and on any parameter.
-            at_init = list(inputs) + parameters
-            SubElement(initial_node, "Unknown", {
-                "index": str(index[variable.name]),
-                "dependencies": " ".join(str(index[name]) for name in at_init),
-                "dependenciesKind": " ".join("dependent" for _ in at_init),
-            })
+            at_init = sorted(set(direct) | {index[name] for name in parameters})
+            SubElement(initial_node, "Unknown", _unknown(index[variable.name], at_init))
+
+
+def _unknown(index, dependencies):
+    """Attributes of a ModelStructure ``Unknown`` with ascending dependency indices."""
+    return {
+        "index": str(index),
+        "dependencies": " ".join(str(i) for i in dependencies),
+        "dependenciesKind": " ".join("dependent" for _ in dependencies),
+    }

@@ -8,6 +8,7 @@ round-trips exactly).
 """
 
 import numpy as np
+import numpy.random  # imported here: a first import inside an FMU call can crash pythonfmu hosts
 
 __all__ = ["snapshot", "restore"]
 

@@ -1,0 +1,98 @@
+"""The ``sonotrack`` command line: thin sub-commands over the library functions.
+
+Each sub-command imports its module lazily and calls one library function with the same
+argument names. Errors of ours (:class:`SonotrackError`) print one line, no traceback, and
+exit non-zero.
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+from components.common.errors import SonotrackError
+
+__all__ = ["main"]
+
+
+def _cmd_build(args):
+    from orchestrator.build import FMU_PACKAGES, build_all
+
+    names = args.names or None
+    for name in names or []:
+        if name not in FMU_PACKAGES:
+            raise SonotrackError(f"unknown FMU {name!r}; valid choices: "
+                                 f"{', '.join(FMU_PACKAGES)}")
+    paths = build_all(args.out, names)
+    for path in paths:
+        print(f"built {path}")
+    if names is None:
+        _write_ssp(Path(args.out))
+    return 0
+
+
+def _write_ssp(out):
+    try:
+        from orchestrator.ssp import write_ssp_archive
+    except ImportError:
+        return
+    ssd = out / "SystemStructure.ssd"
+    if ssd.is_file():
+        print(f"built {write_ssp_archive(ssd, out / 'tracking.ssp')}")
+
+
+def _cmd_validate(args):
+    from orchestrator.validate import validate_fmus
+
+    paths = args.fmus or sorted(Path(args.dir).glob("*.fmu"))
+    if not paths:
+        raise SonotrackError(f"sonotrack validate: no FMU given and none in {args.dir}; "
+                             "run `sonotrack build` first")
+    total = 0
+    for report in validate_fmus(paths, simulate=not args.no_simulate):
+        status = "ok" if report.ok else f"{len(report.problems)} problem(s)"
+        print(f"{report.path}: {status}")
+        for problem in report.problems:
+            print(f"  - {problem}")
+        total += len(report.problems)
+    print(f"{total} problem(s) in {len(paths)} FMU(s)")
+    return min(total, 125)
+
+
+def _parser():
+    parser = argparse.ArgumentParser(prog="sonotrack", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    build = sub.add_parser("build", help="build the FMUs into fmus/ (and fmus/tracking.ssp)")
+    build.add_argument("names", nargs="*", help="FMU names (default: all)")
+    build.add_argument("--out", default="fmus", help="output folder (default: fmus)")
+    build.set_defaults(func=_cmd_build)
+
+    validate = sub.add_parser("validate", help="check FMUs with fmpy, fmutool and a short run")
+    validate.add_argument("fmus", nargs="*", type=Path, help="FMU files (default: fmus/*.fmu)")
+    validate.add_argument("--dir", default="fmus", help="folder searched when no FMU is given")
+    validate.add_argument("--no-simulate", action="store_true", help="skip the short simulation")
+    validate.set_defaults(func=_cmd_validate)
+
+    for register in _EXTRA_COMMANDS:
+        register(sub)
+    return parser
+
+
+_EXTRA_COMMANDS = []
+
+
+def main(argv=None):
+    """Entry point of the ``sonotrack`` console script; returns the exit status."""
+    args = _parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except SonotrackError as exc:
+        print(f"sonotrack {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"sonotrack {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,222 @@
+"""One FMU instance behind one handle: value references resolved once, batched get/set.
+
+:class:`FmuInstance` wraps fmpy's :class:`~fmpy.fmi2.FMU2Slave`. Ports are resolved to value
+references once (:meth:`FmuInstance.port_group`); the hot path then reads and writes
+preallocated ctypes arrays through the raw FMI functions, so a step allocates nothing.
+Every FMI call that fails raises fmpy's ``FMICallException``; log lines the FMU sends are
+kept in :attr:`FmuInstance.messages` so an error can name what the FMU said.
+"""
+
+import ctypes
+from dataclasses import dataclass
+from pathlib import Path
+
+from components.common.errors import ConfigError
+
+__all__ = ["FmuInstance", "PortGroup", "extract_once"]
+
+_EXTRACTED = {}
+_STATUS = ["ok", "warning", "discard", "error", "fatal", "pending"]
+_CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
+
+
+def extract_once(path):
+    """Extract an FMU once per process and return (model description, unzip folder)."""
+    import fmpy
+
+    path = Path(path).resolve()
+    if path not in _EXTRACTED:
+        _EXTRACTED[path] = (fmpy.read_model_description(str(path)), fmpy.extract(str(path)))
+    return _EXTRACTED[path]
+
+
+@dataclass
+class PortGroup:
+    """Ports of one FMU of one type, with value references and a preallocated buffer."""
+
+    type: str
+    names: tuple
+    references: object  # ctypes array of fmi2ValueReference
+    values: object      # ctypes array of the port type
+
+    def __len__(self):
+        return len(self.names)
+
+
+class FmuInstance:
+    """An instantiated FMI 2.0 co-simulation slave.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.fmu`` file.
+    instance_name : str
+        Name of this instance (appears in the FMU's log lines and in errors).
+    """
+
+    def __init__(self, path, instance_name):
+        from fmpy.fmi2 import FMU2Slave
+
+        self.path = Path(path)
+        self.name = instance_name
+        self.description, unzip_dir = extract_once(path)
+        self.variables = {v.name: v for v in self.description.modelVariables}
+        self.messages = []
+        self._slave = FMU2Slave(guid=self.description.guid, unzipDirectory=unzip_dir,
+                                modelIdentifier=self.description.coSimulation.modelIdentifier,
+                                instanceName=instance_name)
+        self._callbacks = self._make_callbacks()
+        self._instantiated = False
+
+    # ----- life cycle ------------------------------------------------------------------------
+    def _make_callbacks(self):
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy import calloc, free
+
+        def logger(environment, instance, status, category, message):
+            text = message.decode(errors="replace") if message else ""
+            self.messages.append((int(status), text))
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:
+            from fmpy.logging import addLoggerProxy
+            addLoggerProxy(ctypes.byref(callbacks))
+        except Exception:  # the proxy only formats printf arguments; plain text still arrives
+            pass
+        return callbacks
+
+    def instantiate(self, start_time=0.0, stop_time=None, parameters=None):
+        """Instantiate, set parameters in initialisation mode and leave it.
+
+        Parameters
+        ----------
+        start_time, stop_time : float
+            Passed to ``fmi2SetupExperiment``.
+        parameters : dict, optional
+            Variable name to value; types follow the model description.
+        """
+        self._slave.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self._instantiated = True
+        self._slave.setupExperiment(startTime=start_time, stopTime=stop_time)
+        self._slave.enterInitializationMode()
+        if parameters:
+            self.set_values(parameters)
+        self._slave.exitInitializationMode()
+
+    def terminate(self):
+        """Terminate and free the instance (safe to call twice).
+
+        The shared library stays loaded: unloading a pythonfmu binary and loading it again
+        in the same process makes the next instantiation fail (seen with pythonfmu 0.7.0),
+        and fmpy's ``freeInstance`` would unload it.
+        """
+        if self._instantiated:
+            self._instantiated = False
+            try:
+                self._slave.terminate()
+            finally:
+                self._slave.fmi2FreeInstance(self._slave.component)
+
+    # ----- access by name (set-up and tests; not for the hot loop) ----------------------------
+    def variable(self, name):
+        """Return the model variable ``name`` or raise a ConfigError listing valid names."""
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise ConfigError(f"{self.name}: no variable {name!r} in {self.path.name}; valid: "
+                              f"{', '.join(sorted(self.variables))}") from None
+
+    def set_values(self, values):
+        """Set variables by name, each with the setter of its declared type."""
+        for name, value in values.items():
+            variable = self.variable(name)
+            reference = [variable.valueReference]
+            if variable.type == "Real":
+                self._slave.setReal(reference, [float(value)])
+            elif variable.type == "Integer":
+                self._slave.setInteger(reference, [int(value)])
+            elif variable.type == "Boolean":
+                self._slave.setBoolean(reference, [bool(value)])
+            else:
+                self._slave.setString(reference, [str(value)])
+
+    def get_values(self, names):
+        """Return ``{name: value}`` for the given variables."""
+        result = {}
+        for name in names:
+            variable = self.variable(name)
+            reference = [variable.valueReference]
+            getter = {"Real": self._slave.getReal, "Integer": self._slave.getInteger,
+                      "Boolean": self._slave.getBoolean}.get(variable.type, self._slave.getString)
+            result[name] = getter(reference)[0]
+        return result
+
+    # ----- hot path ------------------------------------------------------------------------
+    def port_group(self, type_name, names):
+        """Resolve ports of one type once; return a :class:`PortGroup` for batched access."""
+        from fmpy.fmi2 import fmi2ValueReference
+
+        for name in names:
+            if self.variable(name).type != type_name:
+                raise ConfigError(f"{self.name}.{name} is {self.variable(name).type}, "
+                                  f"not {type_name}")
+        references = (fmi2ValueReference * len(names))(
+            *[self.variables[n].valueReference for n in names])
+        values = (_CTYPE[type_name] * len(names))()
+        return PortGroup(type_name, tuple(names), references, values)
+
+    def read(self, group):
+        """Fill ``group.values`` from the FMU with one get call."""
+        if group.names:
+            function = {"Real": self._slave.fmi2GetReal, "Integer": self._slave.fmi2GetInteger,
+                        "Boolean": self._slave.fmi2GetBoolean}[group.type]
+            function(self._slave.component, group.references, len(group.names), group.values)
+        return group.values
+
+    def write(self, group):
+        """Send ``group.values`` to the FMU with one set call."""
+        if group.names:
+            function = {"Real": self._slave.fmi2SetReal, "Integer": self._slave.fmi2SetInteger,
+                        "Boolean": self._slave.fmi2SetBoolean}[group.type]
+            function(self._slave.component, group.references, len(group.names), group.values)
+
+    def do_step(self, time, step):
+        """Advance the slave from ``time`` by ``step``; raises FMICallException on failure."""
+        self._slave.fmi2DoStep(self._slave.component, time, step, 1)
+
+    # ----- state ---------------------------------------------------------------------------
+    def get_state(self):
+        """Return an opaque FMU state (free it with :meth:`free_state`)."""
+        return self._slave.getFMUstate()
+
+    def set_state(self, state):
+        """Restore a state from :meth:`get_state` or :meth:`deserialize_state`."""
+        self._slave.setFMUstate(state)
+
+    def free_state(self, state):
+        """Release an FMU state."""
+        self._slave.freeFMUstate(state)
+
+    def serialize_state(self, state):
+        """Return the FMU state as bytes."""
+        return self._slave.serializeFMUstate(state)
+
+    def deserialize_state(self, data):
+        """Return an FMU state from bytes made by :meth:`serialize_state`."""
+        return self._slave.deSerializeFMUstate(data)
+
+    def last_error(self):
+        """The last log line with an error or discard status, or ''."""
+        for status, text in reversed(self.messages):
+            if status >= 2:
+                return text
+        return ""
+
+    @staticmethod
+    def status_label(status):
+        """Name of an FMI status code."""
+        return _STATUS[status] if 0 <= status < len(_STATUS) else f"status {status}"
