@@ -1,0 +1,25 @@
+"""Wheel-speed control numerics: the FGS-PD fuzzy gain scheduler, PID and PD laws.
+
+Pure numerics on the standard library (numpy only for the sampled centroid used in tests);
+the pythonfmu slave lives in :mod:`.fmu` and is not imported here.
+"""
+
+from .controller import DEFAULTS, MODES, WheelSpeedController
+from .defuzzify import discrete_centroid, exact_centroid, weighted_average
+from .derivative import FilteredDerivative
+from .fgs_pd import PAPER_TO_OURS, check_gain_range, scheduled_gain
+from .inference import CENTROIDS, METHODS, FuzzyGainScheduler
+from .membership import INPUT_TERMS, OUTPUT_TERMS, fuzzify, input_membership, output_membership
+from .pid import PidLaw
+from .rules import BIG, KD_TABLE, KP_TABLE, SMALL, rule_matrix
+
+__all__ = [
+    "DEFAULTS", "MODES", "WheelSpeedController",
+    "discrete_centroid", "exact_centroid", "weighted_average",
+    "FilteredDerivative",
+    "PAPER_TO_OURS", "check_gain_range", "scheduled_gain",
+    "CENTROIDS", "METHODS", "FuzzyGainScheduler",
+    "INPUT_TERMS", "OUTPUT_TERMS", "fuzzify", "input_membership", "output_membership",
+    "PidLaw",
+    "BIG", "KD_TABLE", "KP_TABLE", "SMALL", "rule_matrix",
+]

@@ -1,0 +1,192 @@
+"""The wheel-speed controller core: FGS-PD (the paper), PID (its CPID baseline) or fixed PD.
+
+Sign convention: the error is ``e = v_ref - v_meas`` (positive when the wheel is too slow)
+and every gain is positive. The paper writes its error the other way round, so its negative
+ranges Kp in [-4, -3], Kd in [-2, -0.3] are kp in [3, 4], kd in [0.3, 2] here, with "max"
+the larger magnitude (see :data:`.fgs_pd.PAPER_TO_OURS`).
+
+Control law, on normalised signals ``e_n = e / e_range`` and ``de_n = de / de_range`` (``de``
+the filtered derivative of ``e``)::
+
+    voltage = clip(g v_ref [feedforward] + g e_range (kp e_n + kd de_n [+ ki I]), +-v_supply)
+
+where ``g = volts_per_speed`` is the motor's steady-state voltage per rim speed. The PD part is
+thus a speed correction ``kp e + kd (e_range / de_range) de`` in m/s, turned into volts by the
+same motor constant as the feedforward: ``kp`` is the dimensionless proportional loop gain at
+DC, whatever the motor. The feedforward supplies the voltage the reference speed needs, so
+the PD law has no steady-state error when ``g`` matches the motor; a mismatch ``g_motor (1 +
+delta)`` leaves ``e_ss = -delta v_ref / (1 + (1 + delta) kp)``.
+"""
+
+import math
+
+from ..common.errors import InputError, ParameterError
+from .derivative import FilteredDerivative
+from .fgs_pd import check_gain_range, scheduled_gain
+from .inference import METHODS, FuzzyGainScheduler
+from .pid import PidLaw
+
+__all__ = ["WheelSpeedController", "MODES", "DEFAULTS"]
+
+MODES = ("fgs_pd", "pid", "pd")
+
+# 14 * (Ke + R b / Kt) / r for the plant's defaults (docs/plant.md): 4.44 V per m/s.
+_VOLTS_PER_SPEED = 14.0 * (0.01808 + 2.4 * 7.17e-6 / 0.01808) / 0.06
+
+DEFAULTS = {
+    "mode": "fgs_pd",
+    "kp_min": 3.0, "kp_max": 4.0, "kd_min": 0.3, "kd_max": 2.0,
+    "pid_kp": 3.0, "pid_ki": 0.5, "pid_kd": 1.0,
+    "pd_kp": 3.5, "pd_kd": 1.15,
+    "e_range": 0.4, "de_range": 4.0,
+    "v_supply": 11.1,
+    "derivative_time_constant": 0.04,
+    "volts_per_speed": _VOLTS_PER_SPEED,
+    "feedforward": True,
+    "fuzzy_method": "weighted",
+}
+
+
+class WheelSpeedController:
+    """Speed controller of one wheel; see the module docstring for the law and conventions.
+
+    Parameters
+    ----------
+    mode : {"fgs_pd", "pid", "pd"}
+    kp_min, kp_max, kd_min, kd_max : float
+        FGS-PD gain ranges of Eq. (50) [1], on e = v_ref - v_meas.
+    pid_kp, pid_ki, pid_kd : float
+        PID gains [1, 1/s, 1]; the paper's CPID: 3, 0.5, 1.
+    pd_kp, pd_kd : float
+        Fixed PD gains [1] (default: the middle of the FGS-PD ranges).
+    e_range : float
+        Error normalisation [m/s]: the error at the edge of the fuzzy universe.
+    de_range : float
+        Error-rate normalisation [m/s^2].
+    v_supply : float
+        Output limit +-v_supply [V].
+    derivative_time_constant : float
+        Time constant of the derivative's low-pass [s].
+    volts_per_speed : float
+        Steady-state armature voltage per rim speed [V s/m]; scales feedforward and PD output.
+    feedforward : bool
+        Add ``volts_per_speed * v_ref``.
+    fuzzy_method : {"weighted", "mamdani"}
+        Defuzzification of the FGS-PD fuzzy system (see :class:`.FuzzyGainScheduler`).
+
+    Attributes
+    ----------
+    error, error_rate, kp, kd, voltage : float
+        Values of the last step (for plots); ``kp``/``kd`` are the gains used.
+    """
+
+    def __init__(self, **parameters):
+        unknown = sorted(set(parameters) - set(DEFAULTS))
+        if unknown:
+            raise ParameterError(f"WheelController: unknown parameters {unknown}; valid: "
+                                 f"{sorted(DEFAULTS)}")
+        p = dict(DEFAULTS, **parameters)
+        problems = []
+        if p["mode"] not in MODES:
+            problems.append(f"mode = {p['mode']!r} is not one of {', '.join(MODES)}")
+        if p["fuzzy_method"] not in METHODS:
+            problems.append(f"fuzzy_method = {p['fuzzy_method']!r} is not one of "
+                            f"{', '.join(METHODS)}")
+        for name in ("e_range", "de_range", "v_supply", "volts_per_speed"):
+            if not (math.isfinite(p[name]) and p[name] > 0.0):
+                problems.append(f"{name} = {p[name]!r} must be a positive finite number")
+        for name in ("pid_kp", "pid_ki", "pid_kd", "pd_kp", "pd_kd", "derivative_time_constant"):
+            if not (math.isfinite(p[name]) and p[name] >= 0.0):
+                problems.append(f"{name} = {p[name]!r} must be finite and >= 0")
+        for name in ("kp", "kd"):
+            try:
+                check_gain_range(name, p[name + "_min"], p[name + "_max"])
+            except ParameterError as exc:
+                problems.append(str(exc))
+        if problems:
+            raise ParameterError("WheelController parameters: " + "; ".join(problems))
+
+        self.mode = p["mode"]
+        self.kp_min, self.kp_max = float(p["kp_min"]), float(p["kp_max"])
+        self.kd_min, self.kd_max = float(p["kd_min"]), float(p["kd_max"])
+        self.pd_kp, self.pd_kd = float(p["pd_kp"]), float(p["pd_kd"])
+        self.e_range, self.de_range = float(p["e_range"]), float(p["de_range"])
+        self.v_supply = float(p["v_supply"])
+        self.volts_per_speed = float(p["volts_per_speed"])
+        self.feedforward = bool(p["feedforward"])
+        self.to_voltage = self.volts_per_speed * self.e_range
+        self.scheduler = FuzzyGainScheduler(self.e_range, self.de_range,
+                                            method=p["fuzzy_method"])
+        self.derivative = FilteredDerivative(float(p["derivative_time_constant"]))
+        self.pid = PidLaw(p["pid_kp"], p["pid_ki"], p["pid_kd"],
+                          integral_limit=self.v_supply / self.to_voltage)
+        self.error = 0.0
+        self.error_rate = 0.0
+        self.kp, self.kd = self._initial_gains()
+        self.voltage = 0.0
+
+    def _initial_gains(self):
+        if self.mode == "fgs_pd":
+            kp_n, kd_n = self.scheduler.evaluate_normalised(0.0, 0.0)
+            return (scheduled_gain(kp_n, self.kp_min, self.kp_max),
+                    scheduled_gain(kd_n, self.kd_min, self.kd_max))
+        if self.mode == "pid":
+            return self.pid.kp, self.pid.kd
+        return self.pd_kp, self.pd_kd
+
+    def step(self, v_ref, v_meas, h):
+        """Compute the armature voltage for one control period.
+
+        Parameters
+        ----------
+        v_ref : float
+            Reference rim speed [m/s].
+        v_meas : float
+            Measured rim speed [m/s] (from the encoder).
+        h : float
+            Control period [s], > 0.
+
+        Returns
+        -------
+        float
+            Voltage [V] in [-v_supply, v_supply].
+
+        Raises
+        ------
+        InputError
+            If ``v_ref`` or ``v_meas`` is not finite or ``h`` is not positive; state unchanged.
+        """
+        if not math.isfinite(v_ref):
+            raise InputError(f"WheelController input v_ref = {v_ref!r} is not finite")
+        if not math.isfinite(v_meas):
+            raise InputError(f"WheelController input v_meas = {v_meas!r} is not finite")
+        if not (math.isfinite(h) and h > 0.0):
+            raise InputError(f"WheelController step size = {h!r} must be > 0")
+        error = v_ref - v_meas
+        rate = self.derivative.update(error, h)
+        e_n = error / self.e_range
+        de_n = rate / self.de_range
+        offset = self.volts_per_speed * v_ref if self.feedforward else 0.0
+        limit = self.v_supply
+        if self.mode == "pid":
+            voltage = self.pid.output(e_n, de_n, h, self.to_voltage, offset, limit)
+        else:
+            if self.mode == "fgs_pd":
+                kp_n, kd_n = self.scheduler.evaluate_normalised(e_n, de_n)
+                self.kp = (self.kp_max - self.kp_min) * kp_n + self.kp_min
+                self.kd = (self.kd_max - self.kd_min) * kd_n + self.kd_min
+            raw = offset + self.to_voltage * (self.kp * e_n + self.kd * de_n)
+            voltage = limit if raw > limit else (-limit if raw < -limit else raw)
+        self.error = error
+        self.error_rate = rate
+        self.voltage = voltage
+        return voltage
+
+    def reset(self):
+        """Return to the state after construction (integrator and filter emptied)."""
+        self.derivative.reset()
+        self.pid.reset()
+        self.error = 0.0
+        self.error_rate = 0.0
+        self.kp, self.kd = self._initial_gains()
+        self.voltage = 0.0
