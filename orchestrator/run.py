@@ -1,0 +1,243 @@
+"""One run: a scenario in, a results folder out (``results.csv``, ``summary.json``, plots).
+
+:func:`run_scenario` is the single code path of the CLI, the reports and the sweeps. It
+checks the system and the scenario before t0 (every problem at once), then steps the master
+with a progress bar, streaming results to disk; if an FMU fails, the rows so far and a
+summary saying what failed stay on disk and :class:`SimulationError` is raised.
+"""
+
+import json
+import math
+import time as wallclock
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from components.common.errors import ConfigError, SimulationError
+
+__all__ = ["RunResult", "run_scenario", "instance_parameters"]
+
+
+@dataclass
+class RunResult:
+    """What a run leaves: its summary and the paths of its files."""
+
+    summary: dict
+    out_dir: Path
+    results_csv: Path
+    summary_json: Path
+    plots: list = field(default_factory=list)
+
+
+def instance_parameters(system, scenario):
+    """Merge ``.ssd`` bindings, scenario overrides and the seed into per-instance dicts.
+
+    Raises
+    ------
+    ConfigError
+        Listing every override that names an unknown instance or parameter.
+    """
+    per_instance = {c.name: {} for c in system.components}
+    for key, value in system.parameter_values.items():
+        instance, name = key.split(".", 1)
+        per_instance[instance][name] = value.value if hasattr(value, "value") else value
+    problems = []
+    for key, value in scenario.parameters.items():
+        instance, dot, name = key.partition(".")
+        if instance not in per_instance:
+            problems.append(f"parameters.{key}: no instance {instance!r}; instances are "
+                            f"{', '.join(per_instance)}")
+            continue
+        component = system.component(instance)
+        parameters = [v.name for v in component.model_description.modelVariables
+                      if v.causality == "parameter"]
+        if name not in parameters:
+            problems.append(f"parameters.{key}: {instance} has no parameter {name!r}; "
+                            f"valid: {', '.join(parameters)}")
+            continue
+        per_instance[instance][name] = value
+    if problems:
+        where = getattr(scenario, "source", None) or getattr(scenario, "path", "scenario")
+        raise ConfigError(f"{where}: " + "; ".join(problems))
+    for component in system.components:
+        names = {v.name for v in component.model_description.modelVariables
+                 if v.causality == "parameter"}
+        if "seed" in names and f"{component.name}.seed" not in scenario.parameters:
+            per_instance[component.name]["seed"] = int(scenario.seed)
+    return per_instance
+
+
+def _rates(system, scenario):
+    rates = {}
+    for component in system.components:
+        step = scenario.steps.get(component.name, scenario.base_step)
+        ratio = step / scenario.base_step
+        rate = int(round(ratio))
+        if rate < 1 or not math.isclose(ratio, rate, rel_tol=1e-9):
+            raise ConfigError(f"steps.{component.name} = {step} is not a positive integer "
+                              f"multiple of base_step = {scenario.base_step}")
+        rates[component.name] = rate
+    return rates
+
+
+def _recorded_columns(system, scenario):
+    if scenario.outputs:
+        for name in scenario.outputs:
+            system.variable(name)  # raises a ConfigError naming the valid variables
+        return list(scenario.outputs)
+    columns = []
+    for component in system.components:
+        for v in component.model_description.modelVariables:
+            if v.causality == "output" and v.type in ("Real", "Integer", "Boolean"):
+                columns.append(f"{component.name}.{v.name}")
+    return columns
+
+
+def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
+                 algorithm=None, record_every=None):
+    """Run one scenario through our master on fmpy.
+
+    Parameters
+    ----------
+    scenario : Scenario or path-like
+        A loaded scenario or the path of a TOML scenario file.
+    out_dir : path-like
+        Folder for ``results.csv``, ``summary.json`` and the plots.
+    progress : bool
+        Show a progress bar on stderr.
+    fmu_dir : path-like, optional
+        Where the FMUs are, if not beside the ``.ssd``.
+    plots : bool
+        Write the PNG plots.
+    algorithm : {"gauss-seidel", "jacobi"}, optional
+        Overrides the scenario's ``master``.
+    record_every : int, optional
+        Record every n-th base step (default: the slowest of the plant and controller rates).
+
+    Returns
+    -------
+    RunResult
+    """
+    from orchestrator.fmu import FmuInstance
+    from orchestrator.master import InstanceSpec, Link, Master
+    from orchestrator.metrics import tracking_summary
+    from orchestrator.recorder import Recorder
+    from orchestrator.scenario import load_scenario
+    from orchestrator.system import load_system
+
+    if not hasattr(scenario, "stop_time"):
+        scenario = load_scenario(scenario)
+    system = load_system(scenario.system, fmu_dir=fmu_dir)
+    parameters = instance_parameters(system, scenario)
+    rates = _rates(system, scenario)
+    columns = _recorded_columns(system, scenario)
+    order = system.stepping_order()
+    specs = [InstanceSpec(name, FmuInstance(system.component(name).fmu_path, name),
+                          rates[name], parameters[name]) for name in order]
+    links = [Link(str(c.start), str(c.end)) for c in system.connections]
+    master = Master(specs, links, scenario.base_step, algorithm or scenario.master)
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    results_csv = out_dir / "results.csv"
+    summary_json = out_dir / "summary.json"
+    record_every = record_every or max(1, min(rates.get("plant", 1),
+                                              rates.get("controller_left", 1)))
+    steps_total = int(round((scenario.stop_time - scenario.start_time) / scenario.base_step)) \
+        if hasattr(scenario, "start_time") else int(round(scenario.stop_time / scenario.base_step))
+    start_time = getattr(scenario, "start_time", 0.0)
+
+    master.initialize(start_time=start_time, stop_time=scenario.stop_time)
+    readers = _column_readers(master, columns)
+    bar = _progress(steps_total, scenario, progress)
+    recorder = Recorder(results_csv, columns)
+    recorder.record(start_time, [read() for read in readers])
+    error = None
+    started = wallclock.perf_counter()
+    try:
+        bar_every = max(1, steps_total // 200)
+
+        def on_step(k, t):
+            if k % record_every == 0:
+                recorder.record(t, [read() for read in readers])
+            if bar is not None and k % bar_every == 0:
+                bar.update(bar_every)
+
+        master.run(start_time + steps_total * scenario.base_step, on_step)
+    except SimulationError as exc:
+        error = str(exc)
+    finally:
+        wall_time = wallclock.perf_counter() - started
+        recorder.close()
+        master.terminate()
+        if bar is not None:
+            bar.close()
+
+    data = recorder.as_arrays()
+    sim_time = master.steps_done * scenario.base_step
+    summary = {
+        "scenario": getattr(scenario, "name", ""),
+        "status": "ok" if error is None else "failed",
+        "sim_time_s": sim_time,
+        "wall_time_s": wall_time,
+        "realtime_factor": sim_time / wall_time if wall_time > 0 else float("inf"),
+        "steps": master.steps_done,
+        "master": master.algorithm,
+        "base_step_s": scenario.base_step,
+        "seed": scenario.seed,
+    }
+    if error is not None:
+        summary["error"] = error
+    if all(c in data for c in ("plant.x", "plant.y", "source.x", "source.y")) and \
+            len(data["time"]) > 1:
+        stop_distance = float(parameters.get("planner", {}).get(
+            "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
+        summary["stop_distance_m"] = stop_distance
+        summary.update(tracking_summary(
+            data["time"],
+            list(zip(data["plant.x"], data["plant.y"])),
+            list(zip(data["source.x"], data["source.y"])), stop_distance))
+    summary_json.write_text(json.dumps(summary, indent=2) + "\n")
+    written = []
+    if plots and len(data["time"]) > 1:
+        from orchestrator.plots import plot_run
+
+        written = plot_run(data, out_dir)
+    result = RunResult(summary, out_dir, results_csv, summary_json, written)
+    if error is not None:
+        raise SimulationError(f"{error} (results so far in {results_csv})")
+    return result
+
+
+def _start_value(system, instance, name, default):
+    try:
+        component = system.component(instance)
+    except ConfigError:
+        return default
+    for v in component.model_description.modelVariables:
+        if v.name == name and v.start is not None:
+            return float(v.start)
+    return default
+
+
+def _column_readers(master, columns):
+    """One zero-argument reader per recorded column, bound to the master's output buffers."""
+    readers = []
+    for column in columns:
+        instance, port = column.split(".", 1)
+        groups = master.outputs(instance)
+        for group in groups.values():
+            if port in group.names:
+                values, index = group.values, group.names.index(port)
+                readers.append(lambda values=values, index=index: values[index])
+                break
+        else:
+            raise ConfigError(f"outputs: {column} is not an output of {instance}")
+    return readers
+
+
+def _progress(total, scenario, enabled):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="step", desc=getattr(scenario, "name", "run"), leave=False)
