@@ -58,6 +58,29 @@ def _cmd_validate(args):
     return min(total, 125)
 
 
+def _cmd_run(args):
+    from orchestrator.run import run_scenario
+
+    scenario = args.scenario or DEFAULT_SCENARIO
+    if not Path(scenario).is_file():
+        raise SonotrackError(f"scenario file {scenario} does not exist; shipped scenarios: "
+                             f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
+    out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
+    result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master)
+    summary = result.summary
+    for key in ("final_distance_to_source_m", "min_distance_to_source_m", "final_position_error_m",
+                "path_rmse_m", "sim_time_s", "wall_time_s", "realtime_factor", "steps"):
+        if key in summary:
+            value = summary[key]
+            print(f"  {key:28s} {value:.4g}" if isinstance(value, float) else
+                  f"  {key:28s} {value}")
+    print(f"results: {result.out_dir.resolve()}")
+    return 0
+
+
+DEFAULT_SCENARIO = "scenarios/s_curve.toml"
+
+
 def _parser():
     parser = argparse.ArgumentParser(prog="sonotrack", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -72,6 +95,14 @@ def _parser():
     validate.add_argument("--dir", default="fmus", help="folder searched when no FMU is given")
     validate.add_argument("--no-simulate", action="store_true", help="skip the short simulation")
     validate.set_defaults(func=_cmd_validate)
+
+    run = sub.add_parser("run", help="run a scenario through our master on fmpy")
+    run.add_argument("scenario", nargs="?", help=f"TOML scenario (default: {DEFAULT_SCENARIO})")
+    run.add_argument("--out", help="results folder (default: runs/<scenario name>)")
+    run.add_argument("--master", choices=("gauss-seidel", "jacobi"),
+                     help="override the scenario's master algorithm")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(func=_cmd_run)
 
     for register in _EXTRA_COMMANDS:
         register(sub)

@@ -118,8 +118,14 @@ class Master:
             inputs[instance][variable.type].append(port)
         self.start_time = float(start_time)
         for spec in self.instances:
-            spec.handle.instantiate(start_time=start_time, stop_time=stop_time,
-                                    parameters=spec.parameters)
+            try:
+                spec.handle.instantiate(start_time=start_time, stop_time=stop_time,
+                                        parameters=spec.parameters)
+            except Exception as exc:
+                said = spec.handle.last_error()
+                self.terminate()
+                raise SimulationError(f"instance {spec.name} failed to initialise: "
+                                      f"{said or exc}") from exc
             self._slots[spec.name] = _Slot(spec, outputs[spec.name], inputs[spec.name])
         for spec in self.instances:
             self._copies[spec.name] = []
