@@ -1,0 +1,126 @@
+"""The RobotPlant FMU: a thin pythonfmu slave around :class:`RobotPlantCore`."""
+
+from dataclasses import fields
+
+from ..common.errors import SonotrackError
+from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from .parameters import PlantParameters
+from .plant import RobotPlantCore
+
+__all__ = ["RobotPlant"]
+
+_REAL_PARAMETERS = (
+    ("mass", "kg", "robot mass"),
+    ("yaw_inertia", "kg.m2", "body yaw inertia about the axle midpoint"),
+    ("wheel_radius", "m", "driven wheel radius"),
+    ("track_width", "m", "distance between the wheel contact points"),
+    ("wheel_inertia", "kg.m2", "inertia of one wheel with hub about its axle"),
+    ("motor_resistance", "Ohm", "armature resistance R"),
+    ("motor_inductance", "H", "armature inductance L"),
+    ("torque_constant", "N.m/A", "motor torque constant Kt"),
+    ("back_emf_constant", "V.s/rad", "motor back-EMF constant Ke"),
+    ("motor_viscous_friction", "N.m.s/rad", "viscous friction at the motor shaft"),
+    ("rotor_inertia", "kg.m2", "motor rotor inertia"),
+    ("gear_ratio", "1", "motor revolutions per wheel revolution"),
+    ("gear_efficiency", "1", "fraction of motor torque reaching the wheel, in (0, 1]"),
+    ("speed_window", "s", "period over which encoder counts give the wheel speed"),
+    ("mu", "1", "tyre-floor friction coefficient"),
+    ("slip_stiffness", "1", "initial slope of traction force over slip, per newton of load"),
+    ("slip_speed_floor", "m/s", "smallest speed normalising the slip (standstill)"),
+    ("v_supply", "V", "battery voltage; inputs are clamped to +-v_supply"),
+    ("gravity", "m/s2", "gravitational acceleration"),
+    ("x0", "m", "start x of the axle midpoint"),
+    ("y0", "m", "start y of the axle midpoint"),
+    ("heading0", "rad", "start heading, counter-clockwise from +x"),
+    ("max_substep", "s", "longest internal integration step"),
+)
+
+# Output port -> (unit, description, core attribute). Every output is a state or a function of
+# the state, so none depends directly on the inputs.
+_REAL_OUTPUTS = (
+    ("x", "m", "true x of the axle midpoint"),
+    ("y", "m", "true y of the axle midpoint"),
+    ("heading", "rad", "true heading, counter-clockwise from +x, not wrapped"),
+    ("wheel_speed_left", "m/s", "left rim speed from encoder counts over speed_window"),
+    ("wheel_speed_right", "m/s", "right rim speed from encoder counts over speed_window"),
+    ("odom_x", "m", "x from encoder-only odometry"),
+    ("odom_y", "m", "y from encoder-only odometry"),
+    ("odom_heading", "rad", "heading from encoder-only odometry"),
+    ("slip_left", "1", "longitudinal slip ratio of the left wheel"),
+    ("slip_right", "1", "longitudinal slip ratio of the right wheel"),
+    ("lateral_slip_speed", "m/s", "sideways sliding speed of the body, left positive"),
+    ("speed", "m/s", "true forward speed of the body"),
+    ("yaw_rate", "rad/s", "true yaw rate, counter-clockwise positive"),
+    ("rim_speed_left", "m/s", "true left rim speed r*omega"),
+    ("rim_speed_right", "m/s", "true right rim speed r*omega"),
+    ("current_left", "A", "left armature current"),
+    ("current_right", "A", "right armature current"),
+)
+_INTEGER_OUTPUTS = (
+    ("encoder_left", "left encoder count (728 per wheel revolution by default)"),
+    ("encoder_right", "right encoder count"),
+)
+_INPUTS = ("voltage_left", "voltage_right")
+
+
+class RobotPlant(SonotrackSlave):
+    """Two geared DC motors, wheels with slip, rigid body, encoders and odometry."""
+
+    description = ("Differential-drive robot: 12 V geared DC motors (IG-32PGM 14:1 class), "
+                   "friction-circle traction with longitudinal and lateral slip, "
+                   "728-count encoders, encoder odometry beside the true pose")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        defaults = PlantParameters()
+        self.voltage_left = 0.0
+        self.voltage_right = 0.0
+        for name, _, _ in _REAL_PARAMETERS:
+            setattr(self, name, float(getattr(defaults, name)))
+        self.encoder_ppr = defaults.encoder_ppr
+        self.core = RobotPlantCore(defaults)
+        self._publish()
+
+        self.input_real("voltage_left", "V", "left armature voltage (clamped to +-v_supply)")
+        self.input_real("voltage_right", "V", "right armature voltage (clamped to +-v_supply)")
+        for name, unit, text in _REAL_OUTPUTS:
+            self.output_real(name, unit, text)
+        for name, text in _INTEGER_OUTPUTS:
+            self.output_integer(name, text)
+        for name, unit, text in _REAL_PARAMETERS:
+            self.parameter_real(name, unit, text)
+        self.parameter_integer("encoder_ppr", "encoder counts per wheel revolution")
+
+    def exit_initialization_mode(self):
+        values = {field.name: getattr(self, field.name) for field in fields(PlantParameters)}
+        values["encoder_ppr"] = int(values["encoder_ppr"])
+        try:
+            self.core = RobotPlantCore(PlantParameters(**values))
+        except SonotrackError as exc:
+            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
+            raise
+        self._publish()
+
+    def do_step(self, current_time, step_size):
+        port = self.first_non_finite(_INPUTS)
+        if port is not None:
+            return self.refuse(port, getattr(self, port), "not a finite voltage")
+        if not step_size > 0.0:
+            return self.refuse("step_size", step_size, "must be > 0")
+        supply = self.core.parameters.v_supply
+        for port in _INPUTS:
+            value = getattr(self, port)
+            if abs(value) > supply:
+                self.log_once(f"clamp {port}", f"input {port} = {value!r} V exceeds the supply "
+                              f"+-{supply!r} V; clamped (further clamping is not logged)")
+        self.core.step(self.voltage_left, self.voltage_right, step_size)
+        self._publish()
+        return True
+
+    def _publish(self):
+        core = self.core
+        for name, _, _ in _REAL_OUTPUTS:
+            setattr(self, name, getattr(core, name))
+        self.encoder_left = core.encoder_left
+        self.encoder_right = core.encoder_right
