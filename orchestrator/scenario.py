@@ -1,0 +1,476 @@
+"""Scenarios: what to run (system, parameter overrides, times, steps, seed, outputs, master).
+
+A scenario is a TOML file (``scenarios/*.toml``) or a plain dict, validated against
+:data:`SCHEMA`, a table written as data: field -> type, whether it is required, its default and
+its allowed values. Every problem (unknown field, wrong type, bad choice, a step that is not a
+multiple of the base step) becomes one line naming the file, the field, the bad value and the
+valid choices, and all lines are raised together in one :class:`ConfigError`.
+
+Checks that need the FMUs (do the instances and parameters exist?) belong to the system layer;
+this module only knows the scenario's own rules.
+
+Seeds: the master passes ``seed`` to every instance that has a ``seed`` parameter, unless
+``parameters`` sets that instance's seed explicitly.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from components.common.errors import ConfigError
+
+__all__ = [
+    "MASTERS",
+    "STEP_TOLERANCE",
+    "Field",
+    "SCHEMA",
+    "Scenario",
+    "load_scenario",
+    "scenario_from_dict",
+    "default_system_path",
+]
+
+MASTERS = ("gauss-seidel", "jacobi")
+# Relative tolerance when checking that a step is an integer multiple of the base step; float
+# steps such as 0.01 / 0.005 are not exact, but an error of 1e-9 is far below any real step.
+STEP_TOLERANCE = 1e-9
+_SEED_MAX = 2**31 - 1   # seeds travel through fmi2Integer (32-bit signed)
+
+
+@dataclass(frozen=True)
+class Field:
+    """Schema entry of one scenario field.
+
+    Attributes
+    ----------
+    kind : str
+        ``"number"``, ``"integer"``, ``"string"``, ``"choice"``, ``"steps"`` (table of
+        instance -> number), ``"parameters"`` (table of ``instance.parameter`` -> scalar) or
+        ``"ports"`` (list of ``instance.port`` strings).
+    required : bool
+        Whether the field must be given.
+    default : object
+        Value when absent (ignored when required).
+    choices : tuple or None
+        Allowed values of a ``"choice"``.
+    minimum : float or None
+        Lower bound; exclusive for numbers (> 0), inclusive for integers.
+    help : str
+        What the field means; quoted in the "required" message.
+    """
+
+    kind: str
+    required: bool = False
+    default: object = None
+    choices: tuple | None = None
+    minimum: float | None = None
+    help: str = ""
+
+
+SCHEMA = {
+    "name": Field("string", help="scenario name; default: the file name without .toml"),
+    "description": Field("string", default="", help="one paragraph for humans"),
+    "system": Field("string", help="path of the .ssd, relative to the scenario file; "
+                                   "default ../fmus/SystemStructure.ssd"),
+    "stop_time": Field("number", required=True, minimum=0.0, help="end time in s, > 0"),
+    "base_step": Field("number", default=0.005, minimum=0.0,
+                       help="master step in s, > 0; every step is a multiple of it"),
+    "steps": Field("steps", default={},
+                   help="communication step per instance in s; default base_step"),
+    "seed": Field("integer", default=1, minimum=0,
+                  help=f"integer seed 0..{_SEED_MAX}, given to every instance with a seed"),
+    "parameters": Field("parameters", default={},
+                        help="'instance.parameter' = value overrides"),
+    "outputs": Field("ports", default=[], help="'instance.port' to record; empty = all outputs"),
+    "master": Field("choice", default="gauss-seidel", choices=MASTERS,
+                    help="co-simulation algorithm"),
+}
+
+_KIND_TEXT = {
+    "number": "a number",
+    "integer": "an integer",
+    "string": "a string",
+    "choice": "a string",
+    "steps": "a table of instance = step in s",
+    "parameters": "a table of 'instance.parameter' = value",
+    "ports": "a list of 'instance.port' strings",
+}
+
+
+def default_system_path(base_dir=None):
+    """The default ``.ssd``: ``<base_dir>/../fmus/SystemStructure.ssd``.
+
+    Without ``base_dir``, the repository's ``fmus/SystemStructure.ssd`` (this package's sibling).
+    """
+    if base_dir is None:
+        return Path(__file__).resolve().parent.parent / "fmus" / "SystemStructure.ssd"
+    return (Path(base_dir) / ".." / "fmus" / "SystemStructure.ssd").resolve()
+
+
+def _type_name(value):
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string",
+            dict: "a table", list: "a list"}.get(type(value), type(value).__name__)
+
+
+def _is_number(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_qualified(name):
+    instance, dot, port = name.partition(".")
+    return bool(dot and instance and port and "." not in port)
+
+
+class _Checker:
+    """Collects problems of one scenario source."""
+
+    def __init__(self, source):
+        self.source = source
+        self.problems = []
+
+    def add(self, field_name, message):
+        self.problems.append(f"{self.source}: field '{field_name}': {message}")
+
+    def number(self, name, value, minimum):
+        if not _is_number(value):
+            self.add(name, f"{value!r} is {_type_name(value)}, expected a number")
+            return None
+        if not math.isfinite(value):
+            self.add(name, f"{value!r} is not finite, expected a number > {minimum:g}")
+            return None
+        if minimum is not None and value <= minimum:
+            self.add(name, f"{value!r} must be > {minimum:g}")
+            return None
+        return float(value)
+
+    def integer(self, name, value, minimum):
+        if not isinstance(value, int) or isinstance(value, bool):
+            self.add(name, f"{value!r} is {_type_name(value)}, expected an integer")
+            return None
+        if (minimum is not None and value < minimum) or value > _SEED_MAX:
+            self.add(name, f"{value!r} is outside {minimum}..{_SEED_MAX}")
+            return None
+        return value
+
+    def string(self, name, value):
+        if not isinstance(value, str):
+            self.add(name, f"{value!r} is {_type_name(value)}, expected a string")
+            return None
+        return value
+
+    def choice(self, name, value, choices):
+        if self.string(name, value) is None:
+            return None
+        if value not in choices:
+            valid = ", ".join(repr(c) for c in choices)
+            self.add(name, f"{value!r} is not one of {valid}")
+            return None
+        return value
+
+    def steps(self, name, value):
+        if not isinstance(value, dict):
+            self.add(name, f"{value!r} is {_type_name(value)}, expected {_KIND_TEXT['steps']}")
+            return None
+        steps = {}
+        for instance, step in value.items():
+            checked = self.number(f"{name}.{instance}", step, 0.0)
+            if checked is not None:
+                steps[instance] = checked
+        return steps
+
+    def parameters(self, name, value):
+        if not isinstance(value, dict):
+            self.add(name, f"{value!r} is {_type_name(value)}, "
+                           f"expected {_KIND_TEXT['parameters']}")
+            return None
+        flat = {}
+        for key, item in value.items():
+            # TOML turns `source.path = "x"` into a nested table; accept both spellings.
+            entries = ([(f"{key}.{sub}", subvalue) for sub, subvalue in item.items()]
+                       if isinstance(item, dict) else [(key, item)])
+            for qualified, scalar in entries:
+                where = f"{name}.{qualified}"
+                if not _is_qualified(qualified):
+                    self.add(where, f"{qualified!r} is not of the form 'instance.parameter'")
+                elif isinstance(scalar, (dict, list)) or not isinstance(
+                        scalar, (bool, int, float, str)):
+                    self.add(where, f"{scalar!r} is {_type_name(scalar)}, expected a number, "
+                                    f"integer, boolean or string")
+                elif isinstance(scalar, float) and not math.isfinite(scalar):
+                    self.add(where, f"{scalar!r} is not finite")
+                elif qualified in flat:
+                    self.add(where, "is given twice (as a dotted key and in a table)")
+                else:
+                    flat[qualified] = scalar
+        return flat
+
+    def ports(self, name, value):
+        if not isinstance(value, list):
+            self.add(name, f"{value!r} is {_type_name(value)}, expected {_KIND_TEXT['ports']}")
+            return None
+        ports = []
+        for position, item in enumerate(value):
+            if not isinstance(item, str) or not _is_qualified(item):
+                self.add(f"{name}[{position}]", f"{item!r} is not an 'instance.port' string")
+            elif item in ports:
+                self.add(f"{name}[{position}]", f"{item!r} is listed twice")
+            else:
+                ports.append(item)
+        return ports
+
+
+def _is_multiple(step, base):
+    ratio = step / base
+    count = round(ratio)
+    return count >= 1 and abs(ratio - count) <= STEP_TOLERANCE * ratio, ratio
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario.
+
+    Attributes
+    ----------
+    name : str
+        Scenario name.
+    description : str
+        Free text.
+    system : pathlib.Path
+        Absolute path of the ``.ssd``.
+    stop_time : float
+        End time in s (the run starts at 0).
+    base_step : float
+        Master step in s.
+    steps : dict of str to float
+        Communication step per instance in s, each an integer multiple of ``base_step``;
+        instances not listed step every ``base_step``.
+    seed : int
+        Given to every instance that has a ``seed`` parameter (unless ``parameters`` sets it).
+    parameters : dict of str to value
+        Overrides keyed ``"instance.parameter"``.
+    outputs : list of str
+        ``"instance.port"`` to record; empty means every output.
+    master : str
+        ``"gauss-seidel"`` or ``"jacobi"``.
+    source : str
+        Where the scenario came from (file path or ``"<dict>"``); not part of equality.
+    """
+
+    name: str
+    description: str
+    system: Path
+    stop_time: float
+    base_step: float
+    steps: dict[str, float]
+    seed: int
+    parameters: dict[str, object]
+    outputs: list[str]
+    master: str
+    source: str = field(default="<dict>", compare=False)
+
+    def __hash__(self):
+        # The dict fields make the generated hash fail; the canonical JSON is hashable.
+        return hash(json.dumps(self.to_dict(), sort_keys=True))
+
+    def step(self, instance):
+        """Communication step of ``instance`` in s (``base_step`` unless listed in ``steps``)."""
+        return self.steps.get(instance, self.base_step)
+
+    def step_ratio(self, instance):
+        """How many base steps one step of ``instance`` spans (an integer >= 1)."""
+        return round(self.step(instance) / self.base_step)
+
+    @property
+    def step_count(self):
+        """Number of base steps from 0 to ``stop_time``."""
+        return round(self.stop_time / self.base_step)
+
+    def to_dict(self):
+        """Return a plain, JSON-serialisable dict that :func:`scenario_from_dict` reads back."""
+        return {
+            "name": self.name,
+            "description": self.description,
+            "system": str(self.system),
+            "stop_time": self.stop_time,
+            "base_step": self.base_step,
+            "steps": dict(sorted(self.steps.items())),
+            "seed": self.seed,
+            "parameters": dict(sorted(self.parameters.items())),
+            "outputs": list(self.outputs),
+            "master": self.master,
+        }
+
+    def with_overrides(self, **changes):
+        """Return a validated copy with some fields changed, e.g. for a sweep.
+
+        ``parameters`` and ``steps`` are merged into the existing tables (so a sweep over one
+        parameter keeps the others); every other field is replaced.
+
+        Examples
+        --------
+        >>> fast = scenario.with_overrides(parameters={"planner.v_cruise": 0.4}, seed=7)  # doctest: +SKIP
+        """
+        data = self.to_dict()
+        for key, value in changes.items():
+            if key in ("parameters", "steps") and isinstance(value, dict):
+                data[key] = {**data[key], **value}
+            else:
+                data[key] = value
+        return scenario_from_dict(data, source=f"{self.source} with overrides")
+
+    def input_hash(self, extra=None):
+        """SHA-256 hex digest of everything in the scenario that can change a run's result.
+
+        The name and description are left out; the ``.ssd`` enters by the SHA-256 of its
+        content (its path if it is missing), so the same scenario hashes alike in any checkout.
+        FMU contents are outside the scenario: pass their digests in ``extra`` (any
+        JSON-serialisable value) to include them.
+        """
+        data = self.to_dict()
+        del data["name"], data["description"]
+        system = Path(data.pop("system"))
+        data["system_sha256"] = (hashlib.sha256(system.read_bytes()).hexdigest()
+                                 if system.is_file() else str(system))
+        if extra is not None:
+            data["extra"] = extra
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def scenario_from_dict(data, source="<dict>", base_dir=None):
+    """Validate a scenario given as a dict (as TOML would give it).
+
+    Parameters
+    ----------
+    data : dict
+        Fields of :data:`SCHEMA`.
+    source : str
+        Name used in error messages (a file path, or ``"<dict>"``).
+    base_dir : str or pathlib.Path, optional
+        Directory that a relative ``system`` is resolved from, and whose ``../fmus`` holds the
+        default system; without it, the current directory and the repository's ``fmus/``.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ConfigError
+        Listing every problem, one per line.
+    """
+    check = _Checker(source)
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: a scenario is a table of fields, got {_type_name(data)}")
+    for key in data:
+        if key not in SCHEMA:
+            check.problems.append(
+                f"{source}: unknown field {key!r}"
+                + (f" (did you mean {close[0]!r}?)"
+                   if (close := difflib.get_close_matches(key, SCHEMA, n=1)) else "")
+                + f"; valid fields: {', '.join(sorted(SCHEMA))}")
+    values = {}
+    for name, spec in SCHEMA.items():
+        if name not in data:
+            if spec.required:
+                check.problems.append(f"{source}: field '{name}' is required ({spec.help})")
+            else:
+                values[name] = spec.default
+            continue
+        value = data[name]
+        if spec.kind == "number":
+            values[name] = check.number(name, value, spec.minimum)
+        elif spec.kind == "integer":
+            values[name] = check.integer(name, value, spec.minimum)
+        elif spec.kind == "string":
+            values[name] = check.string(name, value)
+        elif spec.kind == "choice":
+            values[name] = check.choice(name, value, spec.choices)
+        elif spec.kind == "steps":
+            values[name] = check.steps(name, value)
+        elif spec.kind == "parameters":
+            values[name] = check.parameters(name, value)
+        elif spec.kind == "ports":
+            values[name] = check.ports(name, value)
+
+    base = values.get("base_step")
+    if base is not None:
+        for instance, step in sorted((values.get("steps") or {}).items()):
+            ok, ratio = _is_multiple(step, base)
+            if not ok:
+                check.add(f"steps.{instance}", f"{step!r} is not an integer multiple of "
+                                               f"base_step {base!r} (ratio {ratio:.6g})")
+        if values.get("stop_time") is not None:
+            ok, ratio = _is_multiple(values["stop_time"], base)
+            if not ok:
+                check.add("stop_time", f"{values['stop_time']!r} is not an integer multiple of "
+                                       f"base_step {base!r} (ratio {ratio:.6g})")
+
+    system = values.get("system")
+    if system is None and "system" not in data:
+        system_path = default_system_path(base_dir)
+    elif system is not None:
+        system_path = Path(system)
+        if not system_path.is_absolute():
+            system_path = (Path(base_dir) if base_dir is not None else Path.cwd()) / system_path
+        system_path = system_path.resolve()
+    else:
+        system_path = None
+    if system_path is not None and not system_path.is_file():
+        check.add("system", f"{str(system_path)!r} does not exist (a path to an .ssd file)")
+
+    if check.problems:
+        count = len(check.problems)
+        noun = "problem" if count == 1 else "problems"
+        raise ConfigError(f"{source}: {count} {noun} in the scenario:\n"
+                          + "\n".join(f"  {p}" for p in check.problems))
+    name = values["name"]
+    if name is None:
+        name = Path(source).stem if source != "<dict>" else "scenario"
+    return Scenario(name=name, description=values["description"], system=system_path,
+                    stop_time=values["stop_time"], base_step=values["base_step"],
+                    steps=dict(values["steps"]), seed=values["seed"],
+                    parameters=dict(values["parameters"]), outputs=list(values["outputs"]),
+                    master=values["master"], source=str(source))
+
+
+def load_scenario(path):
+    """Read and validate a TOML scenario file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.toml`` file. A relative ``system`` resolves from its directory; without one, the
+        system is ``<its directory>/../fmus/SystemStructure.ssd``.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read, is not valid TOML, or breaks the schema (all problems
+        listed, each naming the file and field).
+
+    Examples
+    --------
+    >>> scenario = load_scenario("scenarios/s_curve.toml")   # doctest: +SKIP
+    >>> scenario.step("planner")                             # doctest: +SKIP
+    0.02
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as stream:
+            data = tomllib.load(stream)
+    except OSError as error:
+        raise ConfigError(f"{path}: cannot read the scenario ({error})") from error
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{path}: not valid TOML ({error})") from error
+    return scenario_from_dict(data, source=str(path), base_dir=path.resolve().parent)
