@@ -226,6 +226,10 @@ def direct_dependencies(model_description):
             for v in model_description.modelVariables if v.causality == "output"}
 
 
+def _unit_text(unit):
+    return "no unit" if unit is None else f"unit '{unit}'"
+
+
 def _suggest(name, choices):
     close = difflib.get_close_matches(name, choices, n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
@@ -466,8 +470,8 @@ def _check_connectors(component, md, problems, unknown_ports):
             problems.append(f"{port}: connector type {connector.type} but the FMU variable is "
                             f"{variable.type}")
         elif connector.unit is not None and connector.unit != variable_unit(variable):
-            problems.append(f"{port}: connector unit '{connector.unit}' but the FMU variable's "
-                            f"unit is '{variable_unit(variable)}'")
+            problems.append(f"{port}: connector unit '{connector.unit}' but the FMU variable has "
+                            f"{_unit_text(variable_unit(variable))}")
 
 
 def _check_parameters(component, md, problems):
@@ -542,8 +546,9 @@ def _check_connections(description, model_descriptions, problems, unknown_ports)
             problems.append(f"connection {connection}: type mismatch, {start_name} is "
                             f"{start.type} and {end_name} is {end.type}")
         elif start.type == "Real" and variable_unit(start) != variable_unit(end):
-            problems.append(f"connection {connection}: unit mismatch, {start_name} is in "
-                            f"'{variable_unit(start)}' and {end_name} in '{variable_unit(end)}'")
+            problems.append(f"connection {connection}: unit mismatch, {start_name} has "
+                            f"{_unit_text(variable_unit(start))} and {end_name} has "
+                            f"{_unit_text(variable_unit(end))}")
     for (element, connector), connections in drivers.items():
         if len(connections) > 1:
             listed = ", ".join(str(c) for c in connections)
@@ -589,8 +594,12 @@ def _check(description, model_descriptions, allow_unconnected, unavailable):
     drivers = _check_connections(description, model_descriptions, problems, unknown_ports)
     _check_unconnected(description, model_descriptions, drivers, set(allow_unconnected),
                        problems)
-    for loop in algebraic_loops(description, model_descriptions):
+    loops = algebraic_loops(description, model_descriptions, limit=_MAX_LOOPS + 1)
+    for loop in loops[:_MAX_LOOPS]:
         problems.append("algebraic loop: " + " -> ".join(loop + loop[:1]))
+    if len(loops) > _MAX_LOOPS:
+        problems.append(f"more than {_MAX_LOOPS} algebraic loops; only the first {_MAX_LOOPS} "
+                        f"are listed (declare outputs' direct dependencies in ModelStructure)")
     return problems
 
 

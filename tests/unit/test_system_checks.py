@@ -243,7 +243,7 @@ def test_connector_type_and_unit_differ_from_fmu(mini):
     description.components[2].connectors[0] = Connector("speed_in", "input", "Real", "rad/s")
     assert check_system(description, mds) == [
         "plant.count: connector type Real but the FMU variable is Integer",
-        "sensor.speed_in: connector unit 'rad/s' but the FMU variable's unit is 'm/s'",
+        "sensor.speed_in: connector unit 'rad/s' but the FMU variable has unit 'm/s'",
     ]
 
 
@@ -267,7 +267,7 @@ def test_connection_type_and_unit_mismatch(mini):
         "connection plant.count -> controller.v_meas: type mismatch, plant.count is Integer "
         "and controller.v_meas is Real",
         "connection controller.voltage -> sensor.speed_in: unit mismatch, controller.voltage "
-        "is in 'V' and sensor.speed_in in 'm/s'",
+        "has unit 'V' and sensor.speed_in has unit 'm/s'",
     ]
 
 
@@ -409,3 +409,19 @@ def test_sonotrack_plant_with_feedthrough_makes_a_loop(tmp_path):
         "algebraic loop: controller_left.voltage -> plant.voltage_left -> "
         "plant.wheel_speed_left -> controller_left.v_meas -> controller_left.voltage",
     ]
+
+
+def test_loop_listing_is_capped_with_a_note(tmp_path):
+    # pythonfmu's default ModelStructure (no dependencies attribute) makes every output depend on
+    # every input: the sonotrack system then has far more than 20 elementary loops.
+    for model, ports in FMU_PORTS.items():
+        outputs = {name: ALL for name, kind, _, _ in ports if kind == "output"}
+        make_fmu(tmp_path / f"{model}.fmu", model, ports, outputs)
+    ssd = write_ssd(tmp_path / "SystemStructure.ssd", sonotrack_system())
+    with pytest.raises(SystemDescriptionError) as caught:
+        load_system(ssd)
+    problems = caught.value.problems
+    assert len(problems) == 21
+    assert all(p.startswith("algebraic loop: ") for p in problems[:20])
+    assert problems[20] == ("more than 20 algebraic loops; only the first 20 are listed "
+                            "(declare outputs' direct dependencies in ModelStructure)")
