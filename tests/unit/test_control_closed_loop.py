@@ -1,0 +1,36 @@
+"""Closed loop on the RobotPlant core, paper Case 1: FGS-PD against the CPID baseline."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("control")
+pytest.importorskip("components.plant")
+
+_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "wheel_loop.py"
+_spec = importlib.util.spec_from_file_location("wheel_loop", _PATH)
+wheel_loop = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(wheel_loop)
+
+
+@pytest.fixture(scope="module")
+def results():
+    configs = {name: wheel_loop.CONFIGS[name] for name in ("fgs_pd", "pid")}
+    return wheel_loop.compare(configs)
+
+
+@pytest.mark.parametrize("side", ["left", "right"], ids=["left", "right"])
+def test_fgs_pd_overshoots_no_more_than_pid(results, side):
+    assert (results["fgs_pd"][side]["overshoot_percent"]
+            <= results["pid"][side]["overshoot_percent"])
+
+
+@pytest.mark.parametrize("side", ["left", "right"], ids=["left", "right"])
+def test_fgs_pd_cruise_error_within_one_encoder_quantum(results, side):
+    # Feedforward + PD: no steady-state error beyond the encoder's quantisation, whose quantum
+    # at a 20 ms window is 2 pi 0.06 / 728 / 0.02 = 25.9 mm/s.
+    quantum = 2 * 3.141592653589793 * 0.06 / 728 / 0.02
+    metrics = results["fgs_pd"][side]
+    assert abs(metrics["mean_cruise_error_m_s"]) < 0.1 * quantum
+    assert metrics["dither_pp_m_s"] < quantum
