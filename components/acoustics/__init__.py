@@ -1,0 +1,31 @@
+"""Acoustic localizer: three-microphone line array, synthesised records, TDOA range and bearing.
+
+Pure numerics (numpy only); the pythonfmu slave is :mod:`.fmu`, not imported here.
+"""
+
+from .burst import ChirpBurst
+from .crlb import (band_derivative_energy, geometry_jacobian, range_bearing_covariance_bound,
+                   tdoa_covariance_bound)
+from .estimators import (ESTIMATORS, ExactNearField, FarField, Location, PaperEq4,
+                         PositionEstimator, far_field_pair_bearings, make_estimator,
+                         register_estimator)
+from .gcc import WEIGHTINGS, DelayEstimate, estimate_delays
+from .geometry import exact_tdoas, microphone_positions, robot_polar, source_in_array_frame
+from .localizer import BurstFixes, FixStatus, LocalizerCore, judge, locate_bursts, locate_records
+from .onset import detect_onsets
+from .settings import DEFAULTS, LocalizerSettings
+from .synthesis import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE, noise_std, quantisation_step,
+                        record_length, synthesise_records)
+from .tdoa import TdoaMeasurement, measure_tdoas
+
+__all__ = [
+    "ChirpBurst", "band_derivative_energy", "geometry_jacobian", "range_bearing_covariance_bound",
+    "tdoa_covariance_bound", "ESTIMATORS", "ExactNearField", "FarField", "Location", "PaperEq4",
+    "PositionEstimator", "far_field_pair_bearings", "make_estimator", "register_estimator",
+    "WEIGHTINGS", "DelayEstimate", "estimate_delays", "exact_tdoas", "microphone_positions",
+    "robot_polar", "source_in_array_frame", "BurstFixes", "FixStatus", "LocalizerCore", "judge",
+    "locate_bursts", "locate_records", "detect_onsets", "DEFAULTS",
+    "LocalizerSettings", "REFERENCE_AMPLITUDE", "REFERENCE_DISTANCE", "noise_std",
+    "quantisation_step", "record_length", "synthesise_records", "TdoaMeasurement",
+    "measure_tdoas",
+]

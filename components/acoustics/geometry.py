@@ -1,0 +1,96 @@
+"""Exact geometry of the three-microphone line array carried across the robot's front.
+
+M1 sits on the robot's left, M2 (the array centre) in the middle, M3 on its right, ``l`` apart;
+the array centre is ``array_offset`` ahead of the robot's reference point along the heading.
+Bearings are counter-clockwise (left) positive, relative to the heading.
+"""
+
+import numpy as np
+
+__all__ = ["microphone_positions", "source_in_array_frame", "exact_tdoas", "robot_polar"]
+
+
+def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_offset=0.0):
+    """Return the world positions of M1, M2, M3.
+
+    Parameters
+    ----------
+    robot_x, robot_y : float
+        Robot reference point [m].
+    robot_heading : float
+        Heading [rad], counter-clockwise from +x.
+    mic_spacing : float
+        Distance ``l`` between adjacent microphones [m].
+    array_offset : float, optional
+        Array centre ahead of the reference point along the heading [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (3, 2): rows M1 (left), M2 (centre), M3 (right).
+    """
+    forward = np.array([np.cos(robot_heading), np.sin(robot_heading)])
+    left = np.array([-forward[1], forward[0]])
+    centre = np.array([robot_x, robot_y]) + array_offset * forward
+    return np.stack([centre + mic_spacing * left, centre, centre - mic_spacing * left])
+
+
+def source_in_array_frame(source_x, source_y, robot_x, robot_y, robot_heading, array_offset=0.0):
+    """Return the source's coordinates ahead of and left of the array centre M2.
+
+    Returns
+    -------
+    tuple of float
+        ``(forward, left)`` [m]; the source is in front of the array when ``forward > 0``.
+    """
+    dx = source_x - robot_x
+    dy = source_y - robot_y
+    cos_h, sin_h = np.cos(robot_heading), np.sin(robot_heading)
+    forward = cos_h * dx + sin_h * dy - array_offset
+    left = -sin_h * dx + cos_h * dy
+    return forward, left
+
+
+def exact_tdoas(distance, bearing, mic_spacing, speed_of_sound):
+    """Return the exact delays ``(tdoa_12, tdoa_23)`` of a source at ``distance``, ``bearing`` from M2.
+
+    ``tdoa_12 = t1 - t2`` and ``tdoa_23 = t3 - t2`` (the paper's Eq. 1: ``R3 = D + c*dt_23``).
+    Works elementwise on arrays.
+
+    Parameters
+    ----------
+    distance : float or array_like
+        Range ``D`` from the array centre M2 [m].
+    bearing : float or array_like
+        Bearing from the array's broadside, left positive [rad].
+    mic_spacing, speed_of_sound : float
+        ``l`` [m] and ``c`` [m/s].
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(tdoa_12, tdoa_23)`` [s].
+    """
+    distance = np.asarray(distance, dtype=float)
+    bearing = np.asarray(bearing, dtype=float)
+    cross = 2.0 * distance * mic_spacing * np.sin(bearing)
+    base = distance**2 + mic_spacing**2
+    range_1 = np.sqrt(base - cross)
+    range_3 = np.sqrt(base + cross)
+    return (range_1 - distance) / speed_of_sound, (range_3 - distance) / speed_of_sound
+
+
+def robot_polar(distance, bearing, array_offset):
+    """Move a fix ``(distance, bearing)`` from the array centre to the robot's reference point.
+
+    The planner works about the wheel axle, so the outputs refer to the point the array is
+    mounted ``array_offset`` ahead of. Elementwise on arrays.
+
+    Returns
+    -------
+    tuple
+        ``(distance, bearing)`` from the reference point [m, rad].
+    """
+    forward = array_offset + distance * np.cos(bearing)
+    left = distance * np.sin(bearing)
+    return np.hypot(forward, left), np.arctan2(left, forward)

@@ -1,0 +1,218 @@
+"""The acoustic localizer: sensor (synthesised microphone records) and estimator in one core.
+
+:func:`locate_bursts` runs one burst per geometry, vectorised over any batch of geometries
+(the benchmark's Monte Carlo); :class:`LocalizerCore` is the stateful sample-and-hold the FMU
+wraps: one fix per ``fix_period`` while the source emits, the last valid fix held otherwise.
+"""
+
+import math
+
+import numpy as np
+
+from ..common.errors import InputError
+from .estimators import make_estimator
+from .geometry import microphone_positions, robot_polar, source_in_array_frame
+from .settings import LocalizerSettings
+from .synthesis import synthesise_records
+from .tdoa import measure_tdoas
+
+__all__ = ["FixStatus", "BurstFixes", "judge", "locate_bursts", "locate_records", "LocalizerCore"]
+
+
+class FixStatus:
+    """Outcome codes of a fix attempt (the ``fix_status`` output); 0 is a valid fix."""
+
+    OK = 0
+    NOT_EMITTING = 1
+    BEHIND = 2
+    TOO_CLOSE = 3
+    OUT_OF_RANGE = 4
+    NO_ONSET = 5
+    WEAK_PEAK = 6
+    LAG_AT_BOUND = 7
+    INCONSISTENT = 8
+    ESTIMATE_OUT_OF_RANGE = 9
+    NAMES = ("ok", "not emitting", "source behind the array", "source closer than min_range",
+             "source beyond max_range", "no burst onset detected", "weak correlation peak",
+             "correlation peak on the +-l/c bound", "delays geometrically inconsistent",
+             "estimated range beyond max_range")
+
+
+class BurstFixes:
+    """Result of :func:`locate_bursts` (arrays over the batch shape).
+
+    Attributes
+    ----------
+    tdoa_12, tdoa_23 : numpy.ndarray
+        Measured delays [s].
+    distance, bearing : numpy.ndarray
+        Range [m] and bearing [rad] from the array centre M2 (NaN where inconsistent).
+    quality : numpy.ndarray
+        The weaker pair's peak quality.
+    status : numpy.ndarray of int
+        :class:`FixStatus` code per burst.
+    """
+
+    def __init__(self, tdoa_12, tdoa_23, distance, bearing, quality, status):
+        self.tdoa_12 = tdoa_12
+        self.tdoa_23 = tdoa_23
+        self.distance = distance
+        self.bearing = bearing
+        self.quality = quality
+        self.status = status
+
+    @property
+    def valid(self):
+        """Boolean array: the burst gave a valid fix."""
+        return self.status == FixStatus.OK
+
+
+def judge(measurement, location, settings):
+    """Return the :class:`FixStatus` of each measured burst (the first failed check wins)."""
+    quality = measurement.quality.min(axis=-1)
+    status = np.full(quality.shape, FixStatus.OK)
+    checks = (
+        (location.distance > settings.max_range, FixStatus.ESTIMATE_OUT_OF_RANGE),
+        (~location.consistent, FixStatus.INCONSISTENT),
+        (measurement.at_bound, FixStatus.LAG_AT_BOUND),
+        (quality < settings.min_peak_quality, FixStatus.WEAK_PEAK),
+        (~measurement.detected, FixStatus.NO_ONSET),
+    )
+    # Applied from the least to the most fundamental failure, so the most fundamental one wins.
+    for failed, code in checks:
+        status = np.where(failed, code, status)
+    return status
+
+
+def locate_bursts(settings, estimator, ranges, rng):
+    """Synthesise and localise one burst for each row of ``ranges``.
+
+    Parameters
+    ----------
+    settings : LocalizerSettings
+    estimator : PositionEstimator
+    ranges : array_like
+        Shape (..., 3): true ranges R1, R2, R3 [m].
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    BurstFixes
+    """
+    records = synthesise_records(
+        settings.burst, ranges, sample_rate=settings.sample_rate,
+        speed_of_sound=settings.speed_of_sound, snr_db=settings.snr_db,
+        adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
+        n_samples=settings.record_samples, rng=rng)
+    return locate_records(settings, estimator, records)
+
+
+def locate_records(settings, estimator, records):
+    """Localise given microphone records of shape (..., 3, n) (e.g. from a room simulator)."""
+    measurement = measure_tdoas(records, settings)
+    location = estimator.locate(measurement.tdoa_12, measurement.tdoa_23)
+    status = judge(measurement, location, settings)
+    return BurstFixes(measurement.tdoa_12, measurement.tdoa_23, location.distance,
+                      location.bearing, measurement.quality.min(axis=-1), status)
+
+
+
+class LocalizerCore:
+    """Sample-and-hold localizer: one fix per ``fix_period`` while the source emits.
+
+    Fix instants are ``k * fix_period``; the step whose interval ``[t, t + h)`` contains one
+    takes a fix from the inputs at ``t``, so outputs never feed through directly. A failed
+    attempt sets ``valid = False`` and keeps the last valid fix's values; ``measurement_id``
+    counts valid fixes.
+
+    Parameters
+    ----------
+    **parameters
+        See :data:`~.settings.DEFAULTS`.
+    """
+
+    def __init__(self, **parameters):
+        self.settings = LocalizerSettings(**parameters)
+        self.estimator = make_estimator(self.settings.method, self.settings.mic_spacing,
+                                        self.settings.speed_of_sound)
+        self.rng = np.random.default_rng(self.settings.seed)
+        self.last_fix_index = -1
+        self.distance = 0.0
+        self.bearing = 0.0
+        self.valid = False
+        self.tdoa_12 = 0.0
+        self.tdoa_23 = 0.0
+        self.measurement_id = 0
+        self.peak_quality = 0.0
+        self.fix_status = FixStatus.NOT_EMITTING
+        self.true_distance = 0.0
+        self.true_bearing = 0.0
+        self.missed_instants = 0
+
+    def fix_due(self, time, step_size):
+        """Return the index of the latest fix instant before ``time + step_size`` not yet served, or None."""
+        # The tolerance keeps an instant that t0 + k*h reaches only up to rounding in the next step.
+        latest = math.ceil((time + step_size) / self.settings.fix_period - 1e-9) - 1
+        return latest if latest > self.last_fix_index else None
+
+    def step(self, time, step_size, source_x, source_y, emitting, robot_x, robot_y, robot_heading):
+        """Advance over ``[time, time + step_size)``; take a fix if an instant falls in it.
+
+        Returns
+        -------
+        bool
+            Whether a fix was attempted in this step.
+
+        Raises
+        ------
+        InputError
+            A position or heading is NaN or infinite (naming the port and value).
+        """
+        for port, value in (("source_x", source_x), ("source_y", source_y),
+                            ("robot_x", robot_x), ("robot_y", robot_y),
+                            ("robot_heading", robot_heading)):
+            if not math.isfinite(value):
+                raise InputError(f"AcousticLocalizer: input {port} = {value!r} is not finite")
+        index = self.fix_due(time, step_size)
+        if index is None:
+            return False
+        if self.last_fix_index >= 0:
+            self.missed_instants += index - self.last_fix_index - 1
+        self.last_fix_index = index
+        self._attempt(source_x, source_y, bool(emitting), robot_x, robot_y, robot_heading)
+        return True
+
+    def _attempt(self, source_x, source_y, emitting, robot_x, robot_y, robot_heading):
+        s = self.settings
+        forward, left = source_in_array_frame(source_x, source_y, robot_x, robot_y,
+                                              robot_heading, s.array_offset)
+        true_distance, true_bearing = robot_polar(math.hypot(forward, left),
+                                                  math.atan2(left, forward), s.array_offset)
+        self.true_distance, self.true_bearing = float(true_distance), float(true_bearing)
+        range_2 = math.hypot(forward, left)
+        # The array cannot tell front from back (a line array's delays are mirror-symmetric),
+        # and the robot's body shadows sound from behind: only the front half-plane is heard.
+        if not emitting:
+            status = FixStatus.NOT_EMITTING
+        elif range_2 < s.min_range:
+            status = FixStatus.TOO_CLOSE
+        elif forward <= 0.0:
+            status = FixStatus.BEHIND
+        elif range_2 > s.max_range:
+            status = FixStatus.OUT_OF_RANGE
+        else:
+            mics = microphone_positions(robot_x, robot_y, robot_heading, s.mic_spacing,
+                                        s.array_offset)
+            ranges = np.hypot(source_x - mics[:, 0], source_y - mics[:, 1])
+            fixes = locate_bursts(s, self.estimator, ranges[None, :], self.rng)
+            status = int(fixes.status[0])
+            self.peak_quality = float(fixes.quality[0])
+            if status == FixStatus.OK:
+                distance, bearing = robot_polar(fixes.distance[0], fixes.bearing[0],
+                                                s.array_offset)
+                self.distance, self.bearing = float(distance), float(bearing)
+                self.tdoa_12 = float(fixes.tdoa_12[0])
+                self.tdoa_23 = float(fixes.tdoa_23[0])
+                self.measurement_id += 1
+        self.fix_status = int(status)
+        self.valid = status == FixStatus.OK
