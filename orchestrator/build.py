@@ -24,6 +24,7 @@ from components.common.errors import BuildError
 
 __all__ = [
     "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "entry_script", "private_package_name",
+    "write_ssp_archive",
 ]
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -146,3 +147,25 @@ def _check_built(fmu_path, name):
     if problems:
         raise BuildError(f"FMU {name}: slave is not a SonotrackSlave or declares ports "
                          f"incompletely: {'; '.join(problems)}")
+
+
+def write_ssp_archive(ssd_path, archive_path, fmu_dir=None):
+    """Zip a ``.ssd`` and the FMUs it names into an ``.ssp`` archive for other tools.
+
+    The archive holds ``SystemStructure.ssd`` with sources rewritten to ``resources/<fmu>``
+    and each FMU once under ``resources/``.
+    """
+    from orchestrator.ssp import read_ssd, ssd_to_string
+
+    description = read_ssd(ssd_path)
+    fmu_dir = Path(fmu_dir) if fmu_dir is not None else Path(ssd_path).parent
+    sources = sorted({c.source for c in description.components})
+    missing = [s for s in sources if not (fmu_dir / s).is_file()]
+    if missing:
+        raise BuildError(f"{archive_path}: FMUs missing from {fmu_dir}: {', '.join(missing)}")
+    text = ssd_to_string(description.with_source_prefix("resources/"))
+    with zipfile.ZipFile(archive_path, "w", zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("SystemStructure.ssd", text)
+        for source in sources:
+            archive.write(fmu_dir / source, f"resources/{source}")
+    return Path(archive_path)

@@ -31,13 +31,12 @@ def _cmd_build(args):
 
 
 def _write_ssp(out):
-    try:
-        from orchestrator.ssp import write_ssp_archive
-    except ImportError:
-        return
+    from orchestrator.build import REPO_ROOT, write_ssp_archive
+
     ssd = out / "SystemStructure.ssd"
-    if ssd.is_file():
-        print(f"built {write_ssp_archive(ssd, out / 'tracking.ssp')}")
+    if not ssd.is_file():
+        ssd = REPO_ROOT / "fmus" / "SystemStructure.ssd"
+    print(f"built {write_ssp_archive(ssd, out / 'tracking.ssp', fmu_dir=out)}")
 
 
 def _cmd_validate(args):
@@ -66,7 +65,8 @@ def _cmd_run(args):
         raise SonotrackError(f"scenario file {scenario} does not exist; shipped scenarios: "
                              f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
-    result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master)
+    result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
+                          fmu_dir=args.fmu_dir)
     summary = result.summary
     for key in ("final_distance_to_source_m", "min_distance_to_source_m", "final_position_error_m",
                 "path_rmse_m", "sim_time_s", "wall_time_s", "realtime_factor", "steps"):
@@ -101,6 +101,7 @@ def _parser():
     run.add_argument("--out", help="results folder (default: runs/<scenario name>)")
     run.add_argument("--master", choices=("gauss-seidel", "jacobi"),
                      help="override the scenario's master algorithm")
+    run.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 
