@@ -1,0 +1,135 @@
+"""The AcousticLocalizer FMU: a thin pythonfmu slave around :class:`LocalizerCore`."""
+
+from ..common.errors import InputError, SonotrackError
+from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from .localizer import FixStatus, LocalizerCore
+from .settings import DEFAULTS
+
+__all__ = ["AcousticLocalizer"]
+
+_REAL_PARAMETERS = (
+    ("mic_spacing", "m", "distance l between adjacent microphones"),
+    ("sample_rate", "Hz", "ADC sampling rate"),
+    ("snr_db", "dB", "burst power over full-band noise variance at 1 m from the source"),
+    ("speed_of_sound", "m/s", "speed of sound c"),
+    ("window", "s", "correlation window from a pair's first onset (paper: 2500 us)"),
+    ("fix_period", "s", "time between fixes (the paper's 100 ms data cycle)"),
+    ("band_low", "Hz", "start frequency of the source's chirp burst"),
+    ("band_high", "Hz", "end frequency of the source's chirp burst"),
+    ("burst_duration", "s", "length of the chirp burst"),
+    ("array_offset", "m", "array centre ahead of the robot reference point along the heading"),
+    ("min_range", "m", "closer sources give no fix"),
+    ("max_range", "m", "farther sources (true or estimated) give no fix"),
+    ("min_peak_quality", "1", "smallest in-band correlation coefficient accepted"),
+    ("onset_threshold_db", "dB", "matched-filter peak over its median needed to detect a burst"),
+)
+_INTEGER_PARAMETERS = (
+    ("adc_bits", "ADC resolution in bits over the full scale [-1, 1)"),
+    ("seed", "seed of the microphone noise; same seed, same result"),
+)
+_STRING_PARAMETERS = (
+    ("method", "range/bearing estimator: exact (near-field), paper (Eq. 4 + Eq. 5), far_field"),
+    ("weighting", "cross-correlation weighting over the source band: band or phat"),
+)
+_POSITION_PORTS = ("source_x", "source_y", "robot_x", "robot_y", "robot_heading")
+
+
+class AcousticLocalizer(SonotrackSlave):
+    """Three-microphone array and TDOA estimator: one fix per ``fix_period`` while emitting.
+
+    A fix uses the inputs at the start of the step whose interval holds the fix instant and
+    appears at the end of that step; no output feeds through directly. Between fixes, and
+    after a failed attempt, the last valid fix is held (``valid`` false after a failure).
+    """
+
+    description = ("Acoustic localizer (Sec. 2): synthesises three microphone records of the "
+                   "source's chirp (fractional delays, 1/r, noise, 10-bit ADC) and estimates "
+                   "range and bearing by band-limited GCC and the exact near-field geometry")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.source_x = 0.0
+        self.source_y = 2.0
+        self.emitting = False
+        self.robot_x = 0.0
+        self.robot_y = 0.0
+        self.robot_heading = 1.5707963267948966
+        for name, _, _ in _REAL_PARAMETERS:
+            setattr(self, name, float(DEFAULTS[name]))
+        for name, _ in _INTEGER_PARAMETERS:
+            setattr(self, name, int(DEFAULTS[name]))
+        for name, _ in _STRING_PARAMETERS:
+            setattr(self, name, str(DEFAULTS[name]))
+        self.core = LocalizerCore()
+        self.distance = 0.0
+        self.bearing = 0.0
+        self.valid = False
+        self.tdoa_12 = 0.0
+        self.tdoa_23 = 0.0
+        self.measurement_id = 0
+        self.peak_quality = 0.0
+        self.fix_status = FixStatus.NOT_EMITTING
+        self.true_distance = 0.0
+        self.true_bearing = 0.0
+
+        self.input_real("source_x", "m", "true source position x (world frame)")
+        self.input_real("source_y", "m", "true source position y (world frame)")
+        self.input_boolean("emitting", "the source sounds its burst")
+        self.input_real("robot_x", "m", "robot reference point x (world frame)")
+        self.input_real("robot_y", "m", "robot reference point y (world frame)")
+        self.input_real("robot_heading", "rad", "robot heading, counter-clockwise from +x")
+        self.output_real("distance", "m", "range of the last valid fix from the robot reference "
+                         "point (the array centre when array_offset = 0)")
+        self.output_real("bearing", "rad", "bearing of the last valid fix, relative to the "
+                         "heading, left (CCW) positive")
+        self.output_boolean("valid", "the latest fix attempt gave a valid fix")
+        self.output_real("tdoa_12", "s", "t1 - t2 of the last valid fix (M1 left, M2 centre)")
+        self.output_real("tdoa_23", "s", "t3 - t2 of the last valid fix (M3 right)")
+        self.output_integer("measurement_id", "number of valid fixes so far; +1 per new fix")
+        self.output_real("peak_quality", "1", "weaker pair's in-band correlation coefficient "
+                         "at the latest attempt")
+        self.output_integer("fix_status", "latest attempt: 0 ok, 1 not emitting, 2 behind, "
+                            "3 too close, 4 beyond max_range, 5 no onset, 6 weak peak, "
+                            "7 lag at +-l/c, 8 inconsistent delays, 9 estimate beyond max_range")
+        self.output_real("true_distance", "m", "true range at the latest attempt (for plots)")
+        self.output_real("true_bearing", "rad", "true bearing at the latest attempt (for plots)")
+        for name, unit, text in _REAL_PARAMETERS:
+            self.parameter_real(name, unit, text)
+        for name, text in _INTEGER_PARAMETERS:
+            self.parameter_integer(name, text)
+        for name, text in _STRING_PARAMETERS:
+            self.parameter_string(name, text)
+
+    def exit_initialization_mode(self):
+        parameters = {name: float(getattr(self, name)) for name, _, _ in _REAL_PARAMETERS}
+        parameters.update({name: int(getattr(self, name)) for name, _ in _INTEGER_PARAMETERS})
+        parameters.update({name: str(getattr(self, name)) for name, _ in _STRING_PARAMETERS})
+        try:
+            self.core = LocalizerCore(**parameters)
+        except SonotrackError as exc:
+            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
+            raise
+
+    def do_step(self, current_time, step_size):
+        port = self.first_non_finite(_POSITION_PORTS)
+        if port is not None:
+            return self.refuse(port, getattr(self, port), "not finite")
+        core = self.core
+        try:
+            attempted = core.step(current_time, step_size, self.source_x, self.source_y,
+                                  self.emitting, self.robot_x, self.robot_y, self.robot_heading)
+        except InputError as exc:
+            return self.refuse("source/robot position", None, str(exc))
+        if not attempted:
+            return True
+        if core.missed_instants:
+            self.log_once("missed", f"step_size {step_size!r} s exceeds fix_period "
+                          f"{core.settings.fix_period!r} s: some fix instants are skipped")
+        self.distance, self.bearing, self.valid = core.distance, core.bearing, core.valid
+        self.tdoa_12, self.tdoa_23 = core.tdoa_12, core.tdoa_23
+        self.measurement_id = core.measurement_id
+        self.peak_quality = core.peak_quality
+        self.fix_status = core.fix_status
+        self.true_distance, self.true_bearing = core.true_distance, core.true_bearing
+        return True
