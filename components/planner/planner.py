@@ -125,16 +125,28 @@ class TargetPlanner:
             If a wheel speed, or a valid fix's distance or bearing, is not finite, or the
             bearing is outside [-pi, pi].
         """
+        measurement_id, valid = int(measurement_id), bool(valid)
+        new_fix = measurement_id != self.last_measurement_id
+        # Check every input before touching any state, so a refused step can be retried.
         for port, value in (("wheel_speed_left", wheel_speed_left),
                             ("wheel_speed_right", wheel_speed_right)):
             if not math.isfinite(value):
                 raise InputError(f"{port} = {value!r}: must be finite")
+        if new_fix and valid:
+            for port, value in (("distance", distance), ("bearing", bearing)):
+                if not math.isfinite(value):
+                    raise InputError(f"{port} = {value!r} of fix {measurement_id}: must be finite")
+            if abs(bearing) > math.pi:
+                raise InputError(f"bearing = {bearing!r} of fix {measurement_id}: "
+                                 "must lie in [-pi, pi] rad")
         elapsed = time - self.last_time if self.started else 0.0
         self.started = True
         self.last_time = float(time)
         self.odometry.advance(wheel_speed_left, wheel_speed_right, elapsed)
         self.mode.record_progress(wheel_speed_left * elapsed, wheel_speed_right * elapsed)
-        self._observe(int(measurement_id), bool(valid), distance, bearing)
+        self.fix_outcome = FIX_NONE
+        if new_fix:
+            self._observe(measurement_id, valid, distance, bearing)
 
         desired_left, desired_right = self.mode.command(self, step_size)
         left, right, fraction = limit_wheel_change(self.v_ref_left, self.v_ref_right,
@@ -146,16 +158,6 @@ class TargetPlanner:
         return left, right
 
     def _observe(self, measurement_id, valid, distance, bearing):
-        self.fix_outcome = FIX_NONE
-        if measurement_id == self.last_measurement_id:
-            return
-        if valid:
-            for port, value in (("distance", distance), ("bearing", bearing)):
-                if not math.isfinite(value):
-                    raise InputError(f"{port} = {value!r} of fix {measurement_id}: must be finite")
-            if abs(bearing) > math.pi:
-                raise InputError(f"bearing = {bearing!r} of fix {measurement_id}: "
-                                 "must lie in [-pi, pi] rad")
         self.last_measurement_id = measurement_id
         if not valid:
             self.fix_outcome = FIX_INVALID

@@ -18,14 +18,16 @@ def circle_through(distance, bearing):
     Independent construction: the centre lies on the x axis at (c, 0); equal distances to the
     origin and to the target fix c.
     """
-    tx, ty = distance * math.cos(math.pi / 2 + bearing), distance * math.sin(math.pi / 2 + bearing)
+    tx = distance * math.cos(math.pi / 2 + bearing)
+    ty = distance * math.sin(math.pi / 2 + bearing)
     c = (tx * tx + ty * ty) / (2.0 * tx)
     return c, abs(c)
 
 
 @pytest.mark.parametrize("distance, bearing_deg", [(2.0, -45.0), (1.0, 45.0), (3.0, 10.0),
                                                    (0.7, -80.0), (1.5, 89.0)],
-                         ids=["2m-right45", "1m-left45", "3m-left10", "0.7m-right80", "1.5m-left89"])
+                         ids=["2m-right45", "1m-left45", "3m-left10", "0.7m-right80",
+                              "1.5m-left89"])
 def test_curvature_and_arc_length_match_circle_construction(distance, bearing_deg):
     bearing = math.radians(bearing_deg)
     centre, radius = circle_through(distance, bearing)

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from components.planner import IDLE, MODES, STOPPING, TURNING, TargetPlanner
+from components.planner import IDLE, MODES, MOVING, STOPPING, TURNING, TargetPlanner
 
 STEP = 0.02
 SUBSTEPS = 4
@@ -54,7 +54,8 @@ def run(planner, fixes, duration, track_width, step=STEP, stop_when_idle=True):
         left, right = planner.update(k * step, step, left, right, *fix)
         trace.append((left, right, planner.radius, planner.state))
         robot.drive(left, right, step)
-        if stop_when_idle and k > 10 and all(row[3] == IDLE for row in trace[-10:]) and planner.has_target:
+        settled = k > 10 and all(row[3] == IDLE for row in trace[-10:])
+        if stop_when_idle and settled and planner.has_target:
             break
     return robot, trace
 
@@ -87,6 +88,10 @@ def test_curvature_mode_holds_the_wheel_ratio_while_accelerating_and_braking():
     ratios = [left / right for left, right, _, _ in trace if right > 0.0]
     assert len(ratios) > 100
     assert max(abs(r - expected) for r in ratios) < 1e-12
+    # One trapezoid: every moving step (accelerate, cruise) comes before every braking step.
+    states = [row[3] for row in trace]
+    last_moving = max(k for k, state in enumerate(states) if state == MOVING)
+    assert last_moving < states.index(STOPPING)
 
 
 def test_case2_replan_keeps_radius_0707_per_segment_and_continuous_speeds():

@@ -40,7 +40,8 @@ def test_s_curve_length_matches_the_arc_length_integral():
     h = 1e-6
 
     def slope(u):
-        return (s_curve_offset(u + h, amplitude, length) - s_curve_offset(u - h, amplitude, length)) / (2 * h)
+        return (s_curve_offset(u + h, amplitude, length)
+                - s_curve_offset(u - h, amplitude, length)) / (2 * h)
 
     expected, _ = quad(lambda u: math.hypot(1.0, slope(u)), 0.0, length, limit=200)
     assert path.length == pytest.approx(expected, rel=1e-6)

@@ -1,0 +1,110 @@
+"""The CurvaturePlanner FMU: a thin pythonfmu slave around :class:`TargetPlanner`."""
+
+from ..common.errors import InputError, SonotrackError
+from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from .geometry import RADIUS_STRAIGHT
+from .planner import FIX_NEGATIVE, TargetPlanner
+
+__all__ = ["CurvaturePlanner"]
+
+_REAL_PARAMETERS = (
+    ("track_width", "m", 0.289, "distance between the wheels, L of Eqs. (38)-(42)"),
+    ("v_cruise", "m/s", 0.3, "cruise speed of the robot centre, V of Eqs. (41)-(42)"),
+    ("v_max", "m/s", 0.4, "largest wheel speed (Eq. 43)"),
+    ("a_max", "m/s2", 0.4, "largest wheel acceleration (Eq. 44)"),
+    ("stop_distance", "m", 0.5, "straight-line distance from the target at which to stop"),
+)
+
+
+class CurvaturePlanner(SonotrackSlave):
+    """Wheel-speed references that drive the robot to each heard fix along one arc.
+
+    The references computed from the inputs at ``t`` are the outputs after the step to
+    ``t + h`` and are meant to be held until the next step; no output feeds through directly.
+    """
+
+    description = ("Curvature planner (Sec. 3.3-3.4): one constant-curvature arc per fix with "
+                   "trapezoidal wheel speeds on one time base; rotate_then_go and pure_pursuit "
+                   "baselines")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=15.0, step_size=0.02)
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.distance = 0.0
+        self.bearing = 0.0
+        self.valid = False
+        self.measurement_id = 0
+        self.wheel_speed_left = 0.0
+        self.wheel_speed_right = 0.0
+        for name, _, default, _ in _REAL_PARAMETERS:
+            setattr(self, name, default)
+        self.mode = "curvature"
+        self.core = TargetPlanner()
+        self.v_ref_left = 0.0
+        self.v_ref_right = 0.0
+        self.radius = RADIUS_STRAIGHT
+        self.curvature = 0.0
+        self.arc_remaining = 0.0
+        self.state = 0
+        self.target_x = 0.0
+        self.target_y = 0.0
+        self.wheel_arc_left = 0.0
+        self.wheel_arc_right = 0.0
+
+        self.input_real("distance", "m", "distance of the latest fix from the array centre")
+        self.input_real("bearing", "rad", "bearing of the latest fix, left (CCW) positive")
+        self.input_boolean("valid", "the latest fix is usable")
+        self.input_integer("measurement_id", "fix counter; a change marks a new fix")
+        self.input_real("wheel_speed_left", "m/s", "measured left wheel rim speed")
+        self.input_real("wheel_speed_right", "m/s", "measured right wheel rim speed")
+        self.output_real("v_ref_left", "m/s", "left wheel speed reference, held to the next step")
+        self.output_real("v_ref_right", "m/s", "right wheel speed reference, held to the next step")
+        self.output_real("radius", "m", f"radius of the path driven (Eq. 36); {RADIUS_STRAIGHT:g} "
+                         "when straight, 0 when turning on the spot")
+        self.output_real("curvature", "1/m", "signed curvature of the path driven, left positive; "
+                         f"+-{RADIUS_STRAIGHT:g} when turning on the spot")
+        self.output_real("arc_remaining", "m", "centre path length still to drive on this plan")
+        self.output_integer("state", "0 idle, 1 moving, 2 stopping, 3 turning on the spot")
+        self.output_real("target_x", "m", "target x in the odometry frame (start pose: origin, +y)")
+        self.output_real("target_y", "m", "target y in the odometry frame")
+        self.output_real("wheel_arc_left", "m", "left wheel distance of the current plan (Eq. 38)")
+        self.output_real("wheel_arc_right", "m",
+                         "right wheel distance of the current plan (Eq. 38)")
+        for name, unit, _, text in _REAL_PARAMETERS:
+            self.parameter_real(name, unit, text)
+        self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
+
+    def exit_initialization_mode(self):
+        parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
+        try:
+            self.core = TargetPlanner(mode=str(self.mode), **parameters)
+        except SonotrackError as exc:
+            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
+            raise
+
+    def do_step(self, current_time, step_size):
+        ports = ("wheel_speed_left", "wheel_speed_right", "distance", "bearing")
+        port = self.first_non_finite(ports if self.valid else ports[:2])
+        if port is not None:
+            return self.refuse(port, getattr(self, port), "not finite")
+        if not step_size > 0.0:
+            return self.refuse("step_size", step_size, "must be > 0")
+        core = self.core
+        try:
+            self.v_ref_left, self.v_ref_right = core.update(
+                current_time, step_size, self.wheel_speed_left, self.wheel_speed_right,
+                self.measurement_id, self.valid, self.distance, self.bearing)
+        except InputError as exc:
+            return self.refuse("bearing", self.bearing, str(exc))
+        if core.fix_outcome == FIX_NEGATIVE:
+            self.log_once(f"negative fix {self.measurement_id}",
+                          f"fix {self.measurement_id}: distance = {self.distance!r} m is "
+                          "negative; fix ignored")
+        self.radius = core.radius
+        self.curvature = core.curvature
+        self.arc_remaining = core.arc_remaining
+        self.state = core.state
+        self.target_x, self.target_y = core.target_x, core.target_y
+        self.wheel_arc_left = core.mode.wheel_arc_left
+        self.wheel_arc_right = core.mode.wheel_arc_right
+        return True
