@@ -91,7 +91,7 @@ class PlantParameters:
     x0: float = 0.0
     y0: float = 0.0
     heading0: float = math.pi / 2
-    max_substep: float = 2.5e-4
+    max_substep: float = 1.0e-3
 
     def validate(self):
         """Raise :class:`ParameterError` listing every invalid parameter at once."""

@@ -1,7 +1,7 @@
 """The robot plant core: two geared DC motors, wheels with traction, rigid body, encoders.
 
 Integration scheme: every communication step is cut into equal internal substeps no longer
-than ``max_substep`` (0.25 ms by default), and additionally at every encoder speed-sample
+than ``max_substep`` (1 ms by default), and additionally at every encoder speed-sample
 instant. Each substep is one linearly implicit (Rosenbrock-Euler, W-method) step: the stiff
 couplings -- armature current to wheel speed (L/R = 1 ms) and tyre force to wheel and body
 speed (time constants down to tens of microseconds at low speed) -- are taken implicitly, the

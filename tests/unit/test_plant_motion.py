@@ -121,7 +121,7 @@ def voltage_profile(t):
 
 @pytest.mark.parametrize("mu", [0.8, 0.1], ids=["grip", "skid"])
 def test_trajectory_matches_a_tight_tolerance_radau_solution(mu):
-    p = PlantParameters(mu=mu)
+    p = PlantParameters(mu=mu, max_substep=2.5e-4)
     state = [0.0] * 9 + [p.heading0]
     for start in (0.0, 0.5, 1.0):
         held = voltage_profile(start)
@@ -142,10 +142,11 @@ def test_trajectory_matches_a_tight_tolerance_radau_solution(mu):
 def test_communication_step_does_not_change_the_trajectory(step, tolerance):
     # Steps on the 0.25 ms substep grid integrate identically; an off-grid step uses slightly
     # shorter substeps and differs by the first-order truncation error only.
-    reference = RobotPlantCore()
+    fine = PlantParameters(max_substep=2.5e-4)
+    reference = RobotPlantCore(fine)
     for k in range(round(1.5 / 0.005)):
         reference.step(*voltage_profile(k * 0.005), 0.005)
-    core = RobotPlantCore()
+    core = RobotPlantCore(fine)
     count = round(1.5 / step)
     for k in range(count):
         core.step(*voltage_profile(k * step), step)
