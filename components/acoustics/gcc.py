@@ -87,9 +87,11 @@ def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
     max_samples = max_lag * sample_rate
     limit = int(np.floor(max_samples))
     lags = np.arange(-limit, limit + 1)
-    # Correlation at integer lags: r(k) = sum_f Re(W G e^{+j 2 pi f k / fs}).
-    phasors = np.exp(2j * np.pi * np.outer(freqs[bins], lags) / sample_rate)
-    correlation = np.real(weighted @ phasors)
+    # Correlation at integer lags, r(k) = sum_f Re(W G e^{+j 2 pi f k / fs}), by one inverse
+    # FFT (which folds the one-sided spectrum itself, hence the division by ``fold``).
+    full = np.zeros(cross.shape[:-1] + (freqs.size,), dtype=complex)
+    full[..., bins] = weighted / fold
+    correlation = n_fft * np.fft.irfft(full, n_fft, axis=-1)[..., lags % n_fft]
     peak = np.argmax(correlation, axis=-1)
     at_bound = (peak == 0) | (peak == lags.size - 1)
 
