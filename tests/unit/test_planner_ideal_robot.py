@@ -94,6 +94,20 @@ def test_curvature_mode_holds_the_wheel_ratio_while_accelerating_and_braking():
     assert last_moving < states.index(STOPPING)
 
 
+def test_table6_accelerations_with_the_papers_one_second_ramp():
+    # Sec. 4.2.2: each speed change takes 1 s, so Table 6 prints accelerations equal to the
+    # speeds. A 1 s ramp of the outer wheel to 0.342 m/s is a_max = 0.342 m/s^2.
+    track, speed = 0.40, 0.3
+    outer = speed * (1 + track / 2 / math.sqrt(2))
+    planner = TargetPlanner(track_width=track, v_cruise=speed, a_max=outer, stop_distance=0.0)
+    _, trace = run(planner, lambda k, r: (1, True, 2.0, -math.pi / 4), 12.0, track, step=0.01)
+    left = [0.0] + [row[0] for row in trace]
+    right = [0.0] + [row[1] for row in trace]
+    assert max(b - a for a, b in zip(left, left[1:])) / 0.01 == pytest.approx(0.342, rel=0.01)
+    assert max(b - a for a, b in zip(right, right[1:])) / 0.01 == pytest.approx(0.258, rel=0.01)
+    assert left.index(max(left)) * 0.01 == pytest.approx(1.0, abs=0.011)
+
+
 def test_case2_replan_keeps_radius_0707_per_segment_and_continuous_speeds():
     # Table 7: 1 m at 45 deg right, then (while moving) 1 m at 45 deg left, V = 0.3 m/s.
     track, a_max, switch = 0.40, 0.4, 100
