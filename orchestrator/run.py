@@ -14,7 +14,7 @@ from pathlib import Path
 
 from components.common.errors import ConfigError, SimulationError
 
-__all__ = ["RunResult", "run_scenario", "instance_parameters"]
+__all__ = ["BACKENDS", "RunResult", "run_scenario", "instance_parameters"]
 
 
 @dataclass
@@ -92,8 +92,11 @@ def _recorded_columns(system, scenario):
     return columns
 
 
+BACKENDS = ("fmi", "in-process")
+
+
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
-                 algorithm=None, record_every=None):
+                 algorithm=None, record_every=None, backend="fmi"):
     """Run one scenario through our master on fmpy.
 
     Parameters
@@ -112,6 +115,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         Overrides the scenario's ``master``.
     record_every : int, optional
         Record every n-th base step (default: the slowest of the plant and controller rates).
+    backend : {"fmi", "in-process"}
+        ``"fmi"`` steps the FMUs through fmpy; ``"in-process"`` steps the same slave classes
+        directly in this process (no FMI), to measure what the FMI layer costs.
 
     Returns
     -------
@@ -131,8 +137,16 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     rates = _rates(system, scenario)
     columns = _recorded_columns(system, scenario)
     order = system.stepping_order()
-    specs = [InstanceSpec(name, FmuInstance(system.component(name).fmu_path, name),
-                          rates[name], parameters[name]) for name in order]
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
+    if backend == "fmi":
+        handles = {name: FmuInstance(system.component(name).fmu_path, name) for name in order}
+    else:
+        from orchestrator.inprocess import SlaveInstance
+
+        handles = {name: SlaveInstance(system.component(name).model_description.modelName, name)
+                   for name in order}
+    specs = [InstanceSpec(name, handles[name], rates[name], parameters[name]) for name in order]
     links = [Link(str(c.start), str(c.end)) for c in system.connections]
     master = Master(specs, links, scenario.base_step, algorithm or scenario.master)
 

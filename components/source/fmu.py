@@ -18,6 +18,9 @@ _REAL_PARAMETERS = (
     ("amplitude", "m", 0.5, "lateral peak of the s_curve path"),
     ("emit_period", "s", 0.01, "time between band-limited bursts"),
     ("start_delay", "s", 0.0, "time at rest before moving"),
+    ("x1", "m", 0.0, "static path only: x of the second position (see switch_time)"),
+    ("y1", "m", 0.0, "static path only: y of the second position (see switch_time)"),
+    ("switch_time", "s", -1.0, "static path only: time the source moves to (x1, y1); < 0 never"),
 )
 
 

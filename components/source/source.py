@@ -36,15 +36,27 @@ class MovingSource:
         Fall silent at the end of the path.
     start_delay : float
         Time at rest before moving [s], >= 0.
+    x1, y1, switch_time : float
+        ``static`` path only: at ``switch_time`` [s] the source stands at (x1, y1) [m]
+        instead, as a second target (the paper's dynamic Case 2). A negative ``switch_time``
+        (the default) keeps the source at its start for ever.
     """
 
     def __init__(self, path="straight", v_max=0.2, a_max=0.2, x0=0.0, y0=1.0,
                  heading0=0.5 * math.pi, length=6.0, amplitude=0.5, emit_period=0.01,
-                 mute_at_end=True, start_delay=0.0):
+                 mute_at_end=True, start_delay=0.0, x1=0.0, y1=0.0, switch_time=-1.0):
         if not (math.isfinite(emit_period) and emit_period > 0.0):
             raise ParameterError(f"emit_period = {emit_period!r}: must be a finite number > 0")
         if not (math.isfinite(start_delay) and start_delay >= 0.0):
             raise ParameterError(f"start_delay = {start_delay!r}: must be a finite number >= 0")
+        for name, value in (("x1", x1), ("y1", y1), ("switch_time", switch_time)):
+            if not math.isfinite(value):
+                raise ParameterError(f"{name} = {value!r}: must be a finite number")
+        if switch_time >= 0.0 and path != "static":
+            raise ParameterError(f"switch_time = {switch_time!r} applies to path 'static' only, "
+                                 f"not {path!r}; set switch_time < 0 for other paths")
+        self.second_position = (float(x1), float(y1))
+        self.switch_time = float(switch_time)
         self.path = make_path(path, x0, y0, heading0, length, amplitude)
         self.profile = TrapezoidProfile(self.path.length, v_max, a_max)
         self.start_delay = float(start_delay)
@@ -70,6 +82,8 @@ class MovingSource:
         self.progress = self.profile.distance(elapsed)
         self.speed = self.profile.speed(elapsed)
         self.x, self.y = self.path.position(self.progress)
+        if 0.0 <= self.switch_time <= t:
+            self.x, self.y = self.second_position
         tangent_x, tangent_y = self.path.tangent(self.progress)
         self.heading = math.atan2(tangent_y, tangent_x)
         self.vx, self.vy = self.speed * tangent_x, self.speed * tangent_y

@@ -131,3 +131,22 @@ def test_unknown_path_lists_the_valid_choices():
         MovingSource("zigzag")
     with pytest.raises(ParameterError, match="cannot read"):
         MovingSource("/nonexistent/waypoints.csv")
+
+
+def test_static_source_moves_to_its_second_position_at_switch_time():
+    from components.source import MovingSource
+
+    source = MovingSource(path="static", x0=0.5, y0=0.5, x1=1.5, y1=1.0, switch_time=4.0)
+    source.advance_to(3.99)
+    assert (source.x, source.y) == (0.5, 0.5)
+    source.advance_to(4.0)
+    assert (source.x, source.y) == (1.5, 1.0)
+    assert source.emitting
+
+
+def test_switch_time_on_a_moving_path_is_refused_with_the_valid_choice():
+    from components.common.errors import ParameterError
+    from components.source import MovingSource
+
+    with pytest.raises(ParameterError, match="switch_time = 2.0 applies to path 'static'"):
+        MovingSource(path="straight", switch_time=2.0)
