@@ -57,8 +57,8 @@ def plot_run(data, out_dir):
         fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
         for ax, (side, controller) in zip(axes, wheels):
             ax.plot(t, data[f"plant.wheel_speed_{side}"], label="measured (encoder)", lw=1)
-            if f"plant.true_wheel_speed_{side}" in data:
-                ax.plot(t, data[f"plant.true_wheel_speed_{side}"], label="true", lw=1, alpha=0.7)
+            if f"plant.rim_speed_{side}" in data:
+                ax.plot(t, data[f"plant.rim_speed_{side}"], label="true", lw=1, alpha=0.7)
             if f"planner.v_ref_{side}" in data:
                 ax.plot(t, data[f"planner.v_ref_{side}"], "k--", label="reference", lw=1)
             ax.set_ylabel(f"{side} wheel [m/s]")
