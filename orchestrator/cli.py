@@ -66,7 +66,7 @@ def _cmd_run(args):
                              f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
     result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
-                          fmu_dir=args.fmu_dir)
+                          fmu_dir=args.fmu_dir, record_interval=args.record_interval)
     summary = result.summary
     for key in ("final_distance_to_source_m", "min_distance_to_source_m", "final_position_error_m",
                 "path_rmse_m", "sim_time_s", "wall_time_s", "realtime_factor", "steps"):
@@ -102,6 +102,8 @@ def _parser():
     run.add_argument("--master", choices=("gauss-seidel", "jacobi"),
                      help="override the scenario's master algorithm")
     run.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
+    run.add_argument("--record-interval", type=float, default=0.02,
+                     help="simulated seconds between recorded rows (default 0.02)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 

@@ -38,6 +38,8 @@ class PortGroup:
     names: tuple
     references: object  # ctypes array of fmi2ValueReference
     values: object      # ctypes array of the port type
+    get_function: object = None  # raw fmi2Get<type>
+    set_function: object = None  # raw fmi2Set<type>
 
     def __len__(self):
         return len(self.names)
@@ -67,6 +69,7 @@ class FmuInstance:
                                 instanceName=instance_name)
         self._callbacks = self._make_callbacks()
         self._instantiated = False
+        self._do_step = self._raw("fmi2DoStep")
 
     # ----- life cycle ------------------------------------------------------------------------
     def _make_callbacks(self):
@@ -156,6 +159,17 @@ class FmuInstance:
         return result
 
     # ----- hot path ------------------------------------------------------------------------
+    # The raw ctypes functions, called without fmpy's per-call wrapper (which looks up the
+    # function by name and checks for a call logger on every call); statuses are checked here.
+    def _raw(self, name):
+        return self._slave._functions[name]
+
+    def _check(self, status, function):
+        if status > 1:  # above fmi2Warning
+            from fmpy.fmi1 import FMICallException
+
+            raise FMICallException(function=function, status=status)
+
     def port_group(self, type_name, names):
         """Resolve ports of one type once; return a :class:`PortGroup` for batched access."""
         from fmpy.fmi2 import fmi2ValueReference
@@ -167,26 +181,31 @@ class FmuInstance:
         references = (fmi2ValueReference * len(names))(
             *[self.variables[n].valueReference for n in names])
         values = (_CTYPE[type_name] * len(names))()
-        return PortGroup(type_name, tuple(names), references, values)
+        return PortGroup(type_name, tuple(names), references, values,
+                         self._raw(f"fmi2Get{type_name}"), self._raw(f"fmi2Set{type_name}"))
 
     def read(self, group):
         """Fill ``group.values`` from the FMU with one get call."""
         if group.names:
-            function = {"Real": self._slave.fmi2GetReal, "Integer": self._slave.fmi2GetInteger,
-                        "Boolean": self._slave.fmi2GetBoolean}[group.type]
-            function(self._slave.component, group.references, len(group.names), group.values)
+            status = group.get_function(self._slave.component, group.references,
+                                        len(group.names), group.values)
+            if status > 1:
+                self._check(status, f"fmi2Get{group.type}")
         return group.values
 
     def write(self, group):
         """Send ``group.values`` to the FMU with one set call."""
         if group.names:
-            function = {"Real": self._slave.fmi2SetReal, "Integer": self._slave.fmi2SetInteger,
-                        "Boolean": self._slave.fmi2SetBoolean}[group.type]
-            function(self._slave.component, group.references, len(group.names), group.values)
+            status = group.set_function(self._slave.component, group.references,
+                                        len(group.names), group.values)
+            if status > 1:
+                self._check(status, f"fmi2Set{group.type}")
 
     def do_step(self, time, step):
         """Advance the slave from ``time`` by ``step``; raises FMICallException on failure."""
-        self._slave.fmi2DoStep(self._slave.component, time, step, 1)
+        status = self._do_step(self._slave.component, time, step, 1)
+        if status > 1:
+            self._check(status, "fmi2DoStep")
 
     # ----- state ---------------------------------------------------------------------------
     def get_state(self):

@@ -8,7 +8,9 @@ Jacobi mode every instance due at ``k`` reads the outputs as they were at ``t_k`
 
 Value references are resolved once. Each step does one batched set and one batched get per
 type per instance (through preallocated ctypes arrays) and copies connected values with a
-precomputed list of ``(source array, index, destination array, index)``.
+precomputed list of ``(source array, index, destination array, index)``. Only outputs that
+feed a connection are read every step; others are read when someone asks for them
+(:meth:`Master.read_outputs`, e.g. the recorder at its own interval).
 """
 
 import math
@@ -108,11 +110,11 @@ class Master:
         by_name = {spec.name: spec for spec in self.instances}
         outputs = {name: {t: [] for t in _TYPES} for name in by_name}
         inputs = {name: {t: [] for t in _TYPES} for name in by_name}
-        for spec in self.instances:
-            for variable in spec.handle.variables.values():
-                if variable.causality == "output" and variable.type in _TYPES:
-                    outputs[spec.name][variable.type].append(variable.name)
         for link in self.links:
+            instance, port = link.source.split(".", 1)
+            variable = by_name[instance].handle.variables[port]
+            if port not in outputs[instance][variable.type]:
+                outputs[instance][variable.type].append(port)
             instance, port = link.destination.split(".", 1)
             variable = by_name[instance].handle.variables[port]
             inputs[instance][variable.type].append(port)
@@ -145,8 +147,16 @@ class Master:
         self._plan = [(self._slots[s.name], s.rate, self._copies[s.name]) for s in self.instances]
 
     def outputs(self, instance):
-        """Current output buffers of ``instance``: {type: PortGroup}."""
+        """Buffers of the connected outputs of ``instance``: {type: PortGroup}."""
         return self._slots[instance].outputs
+
+    def output_group(self, instance, type_name, names):
+        """Resolve any outputs of ``instance`` into a group for :meth:`read_outputs`."""
+        return self._slots[instance].spec.handle.port_group(type_name, names)
+
+    def read_outputs(self, instance, group):
+        """Read a group from :meth:`output_group` now (one batched get); return its values."""
+        return self._slots[instance].spec.handle.read(group)
 
     # ----- stepping --------------------------------------------------------------------------
     def time_of(self, k):

@@ -58,9 +58,13 @@ def tracking_summary(time, robot_xy, source_xy, stop_distance):
     distance = np.hypot(*(robot_xy - source_xy).T)
     moved = np.hypot(*(robot_xy - robot_xy[0]).T) > 1e-3
     on_path = robot_xy[moved] if moved.any() else robot_xy[-1:]
-    # the source's path, thinned so the polyline distance stays cheap
-    stride = max(1, len(source_xy) // 2000)
-    deviation = distance_to_polyline(on_path, source_xy[::stride])
+    # thinned so the polyline distance stays cheap: 500 vertices of a path of a few metres are
+    # centimetres apart, and the chord error of that is far below a millimetre
+    on_path = on_path[::max(1, len(on_path) // 3000)]
+    path = source_xy[::max(1, len(source_xy) // 500)]
+    if len(source_xy) and not np.array_equal(path[-1], source_xy[-1]):
+        path = np.vstack([path, source_xy[-1:]])
+    deviation = distance_to_polyline(on_path, path)
     return {
         "final_distance_to_source_m": float(distance[-1]),
         "final_position_error_m": float(abs(distance[-1] - stop_distance)),

@@ -43,7 +43,8 @@ class Recorder:
         """Append one row; flush when a simulated flush period has passed."""
         row = [time] + list(values)
         self._rows.append(row)
-        self._writer.writerow([repr(v) if isinstance(v, float) else v for v in row])
+        # repr round-trips floats exactly; ints and bools (as 0/1 from FMI) print as they are
+        self._file.write(",".join(map(repr, row)) + "\n")
         if time >= self._next_flush:
             self.flush()
             while self._next_flush <= time:

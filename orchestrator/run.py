@@ -96,7 +96,7 @@ BACKENDS = ("fmi", "in-process")
 
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
-                 algorithm=None, record_every=None, backend="fmi"):
+                 algorithm=None, record_interval=0.02, backend="fmi"):
     """Run one scenario through our master on fmpy.
 
     Parameters
@@ -113,8 +113,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         Write the PNG plots.
     algorithm : {"gauss-seidel", "jacobi"}, optional
         Overrides the scenario's ``master``.
-    record_every : int, optional
-        Record every n-th base step (default: the slowest of the plant and controller rates).
+    record_interval : float, optional
+        Simulated time between recorded rows, rounded to a whole number of base steps
+        (default 0.02 s, the speed loop's period; at most one row per base step).
     backend : {"fmi", "in-process"}
         ``"fmi"`` steps the FMUs through fmpy; ``"in-process"`` steps the same slave classes
         directly in this process (no FMI), to measure what the FMI layer costs.
@@ -154,17 +155,16 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     out_dir.mkdir(parents=True, exist_ok=True)
     results_csv = out_dir / "results.csv"
     summary_json = out_dir / "summary.json"
-    record_every = record_every or max(1, min(rates.get("plant", 1),
-                                              rates.get("controller_left", 1)))
+    record_every = max(1, int(round(record_interval / scenario.base_step)))
     steps_total = int(round((scenario.stop_time - scenario.start_time) / scenario.base_step)) \
         if hasattr(scenario, "start_time") else int(round(scenario.stop_time / scenario.base_step))
     start_time = getattr(scenario, "start_time", 0.0)
 
     master.initialize(start_time=start_time, stop_time=scenario.stop_time)
-    readers = _column_readers(master, columns)
+    read_row = _ColumnReader(master, system, columns)
     bar = _progress(steps_total, scenario, progress)
     recorder = Recorder(results_csv, columns)
-    recorder.record(start_time, [read() for read in readers])
+    recorder.record(start_time, read_row())
     error = None
     started = wallclock.perf_counter()
     try:
@@ -172,7 +172,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
         def on_step(k, t):
             if k % record_every == 0:
-                recorder.record(t, [read() for read in readers])
+                recorder.record(t, read_row())
             if bar is not None and k % bar_every == 0:
                 bar.update(bar_every)
 
@@ -233,20 +233,34 @@ def _start_value(system, instance, name, default):
     return default
 
 
-def _column_readers(master, columns):
-    """One zero-argument reader per recorded column, bound to the master's output buffers."""
-    readers = []
-    for column in columns:
-        instance, port = column.split(".", 1)
-        groups = master.outputs(instance)
-        for group in groups.values():
-            if port in group.names:
-                values, index = group.values, group.names.index(port)
-                readers.append(lambda values=values, index=index: values[index])
-                break
-        else:
-            raise ConfigError(f"outputs: {column} is not an output of {instance}")
-    return readers
+class _ColumnReader:
+    """Reads the recorded columns with one batched get per type per instance."""
+
+    def __init__(self, master, system, columns):
+        by_instance = {}
+        for column in columns:
+            instance, port = column.split(".", 1)
+            variable = system.variable(column)
+            if variable.causality != "output":
+                raise ConfigError(f"outputs: {column} is a {variable.causality}, not an output")
+            by_instance.setdefault(instance, {}).setdefault(variable.type, []).append(port)
+        self._groups = []
+        position = {column: i for i, column in enumerate(columns)}
+        for instance, by_type in by_instance.items():
+            for type_name, ports in by_type.items():
+                group = master.output_group(instance, type_name, ports)
+                slots = [position[f"{instance}.{port}"] for port in ports]
+                self._groups.append((instance, group, slots))
+        self._master = master
+        self._row = [0.0] * len(columns)
+
+    def __call__(self):
+        row = self._row
+        for instance, group, slots in self._groups:
+            values = self._master.read_outputs(instance, group)
+            for slot, value in zip(slots, values):
+                row[slot] = value
+        return row
 
 
 def _progress(total, scenario, enabled):

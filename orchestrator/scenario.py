@@ -79,7 +79,7 @@ SCHEMA = {
     "system": Field("string", help="path of the .ssd, relative to the scenario file; "
                                    "default ../fmus/SystemStructure.ssd"),
     "stop_time": Field("number", required=True, minimum=0.0, help="end time in s, > 0"),
-    "base_step": Field("number", default=0.005, minimum=0.0,
+    "base_step": Field("number", default=0.01, minimum=0.0,
                        help="master step in s, > 0; every step is a multiple of it"),
     "steps": Field("steps", default={},
                    help="communication step per instance in s; default base_step"),

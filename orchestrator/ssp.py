@@ -723,9 +723,9 @@ SONOTRACK_STEP_SIZES = {
     "source": 0.01,
     "localizer": 0.01,
     "planner": 0.02,
-    "controller_left": 0.005,
-    "controller_right": 0.005,
-    "plant": 0.005,
+    "controller_left": 0.02,
+    "controller_right": 0.02,
+    "plant": 0.02,
 }
 
 

@@ -6,6 +6,8 @@ band-limited correlation written as a Fourier series over the weighted bins, whi
 (sinc) interpolation of the sampled correlation: no interpolation bias, whatever the fraction.
 """
 
+import functools
+
 import numpy as np
 
 from ..common.errors import ParameterError
@@ -40,6 +42,23 @@ class DelayEstimate:
         self.at_bound = at_bound
 
 
+@functools.lru_cache(maxsize=32)
+def _grid(n, sample_rate, low, high):
+    """FFT size, bin frequencies, in-band bins, their one-sided weights and angular steps.
+
+    Cached: a localizer calls this with the same window every fix. The arrays are read-only.
+    """
+    n_fft = 1 << int(np.ceil(np.log2(2 * n)))
+    freqs = np.fft.rfftfreq(n_fft, 1.0 / sample_rate)
+    bins = np.flatnonzero((freqs >= low) & (freqs <= high))
+    # One-sided spectrum of a real signal: interior bins count twice.
+    fold = np.where((freqs[bins] == 0.0) | (bins == n_fft // 2), 1.0, 2.0)
+    omega = 2.0 * np.pi * freqs[bins] / sample_rate
+    for array in (freqs, bins, fold, omega):
+        array.setflags(write=False)
+    return n_fft, freqs, bins, fold, omega
+
+
 def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
     """Estimate the delay of ``u`` relative to ``v`` along the last axis.
 
@@ -64,11 +83,8 @@ def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
     if weighting not in WEIGHTINGS:
         raise ParameterError(f"weighting = {weighting!r}; valid choices: {', '.join(WEIGHTINGS)}")
     n = u.shape[-1]
-    n_fft = 1 << int(np.ceil(np.log2(2 * n)))
-    freqs = np.fft.rfftfreq(n_fft, 1.0 / sample_rate)
-    bins = np.flatnonzero((freqs >= passband[0]) & (freqs <= passband[1]))
-    # One-sided spectrum of a real signal: interior bins count twice.
-    fold = np.where((freqs[bins] == 0.0) | (bins == n_fft // 2), 1.0, 2.0)
+    n_fft, freqs, bins, fold, omega = _grid(n, float(sample_rate), float(passband[0]),
+                                            float(passband[1]))
     spectrum_u = np.fft.rfft(u, n_fft, axis=-1)[..., bins]
     spectrum_v = np.fft.rfft(v, n_fft, axis=-1)[..., bins]
     cross = spectrum_u * np.conj(spectrum_v)
@@ -103,7 +119,6 @@ def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
     curvature = left - 2.0 * centre + right
     offset = np.where(curvature < 0.0, 0.5 * (left - right) / np.where(curvature < 0, curvature, -1.0), 0.0)
     lag = lags[peak] + np.where(at_bound, 0.0, np.clip(offset, -0.5, 0.5))
-    omega = 2.0 * np.pi * freqs[bins] / sample_rate
     for _ in range(_NEWTON_STEPS):
         rotated = weighted * np.exp(1j * omega * lag[..., None])
         slope = -np.sum(omega * np.imag(rotated), axis=-1)

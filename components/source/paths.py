@@ -12,6 +12,7 @@ which is ``+A`` at ``u = l/3``, ``-A`` at ``u = 2l/3`` and has zero value and sl
 ends, so the source starts and ends heading along ``heading0``.
 """
 
+import bisect
 import math
 
 import numpy as np
@@ -102,6 +103,10 @@ class SCurvePath:
         # would make the speed along the path wobble by ~0.1 % between nodes.
         self.du_ds_table = 1.0 / np.hypot(1.0, self._slope(self.u_table))
         self.length = float(self.s_table[-1])
+        # plain-float copies for the per-step look-ups: numpy on scalars costs microseconds
+        self._s_list = self.s_table.tolist()
+        self._u_list = self.u_table.tolist()
+        self._du_ds_list = self.du_ds_table.tolist()
 
     def _offset(self, u):
         phase = math.pi * u / self.forward_length
@@ -114,15 +119,22 @@ class SCurvePath:
                 * np.sin(phase) ** 2 * (3.0 * np.cos(phase) ** 2 - np.sin(phase) ** 2))
 
     def _forward(self, s):
+        s_list, u_list, du_ds = self._s_list, self._u_list, self._du_ds_list
         s = min(max(s, 0.0), self.length)
-        i = min(int(np.searchsorted(self.s_table, s, side="right")) - 1, len(self.s_table) - 2)
-        width = self.s_table[i + 1] - self.s_table[i]
-        t = (s - self.s_table[i]) / width
+        i = min(bisect.bisect_right(s_list, s) - 1, len(s_list) - 2)
+        width = s_list[i + 1] - s_list[i]
+        t = (s - s_list[i]) / width
         t2, t3 = t * t, t * t * t
-        return float((2 * t3 - 3 * t2 + 1) * self.u_table[i]
-                     + (t3 - 2 * t2 + t) * width * self.du_ds_table[i]
-                     + (-2 * t3 + 3 * t2) * self.u_table[i + 1]
-                     + (t3 - t2) * width * self.du_ds_table[i + 1])
+        return ((2 * t3 - 3 * t2 + 1) * u_list[i]
+                + (t3 - 2 * t2 + t) * width * du_ds[i]
+                + (-2 * t3 + 3 * t2) * u_list[i + 1]
+                + (t3 - t2) * width * du_ds[i + 1])
+
+    def _slope_at(self, u):
+        phase = math.pi * u / self.forward_length
+        sine, cosine = math.sin(phase), math.cos(phase)
+        return (_PEAK_GAIN * self.amplitude * math.pi / self.forward_length
+                * sine * sine * (3.0 * cosine * cosine - sine * sine))
 
     def position(self, s):
         """Point [m] at arc length ``s`` [m] (clamped to the path)."""
@@ -133,7 +145,7 @@ class SCurvePath:
 
     def tangent(self, s):
         """Unit direction of travel at arc length ``s``."""
-        slope = float(self._slope(self._forward(s)))
+        slope = self._slope_at(self._forward(s))
         norm = math.hypot(1.0, slope)
         c, d = math.cos(self.heading0), math.sin(self.heading0)
         return (c - slope * d) / norm, (d + slope * c) / norm
