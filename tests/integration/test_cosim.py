@@ -108,7 +108,7 @@ def test_libcosim_and_our_jacobi_master_agree(fmu_dir, tmp_path):
 
     scenario = _scenario(stop, step, master="jacobi")
     result = run_scenario(scenario, tmp_path / "ours", progress=False, fmu_dir=fmu_dir,
-                          plots=False)
+                          plots=False, record_interval=step)
     with open(result.results_csv) as f:
         rows = list(csv.DictReader(f))[1:]
     ours = np.array([[float(r["plant.x"]), float(r["plant.y"])] for r in rows])

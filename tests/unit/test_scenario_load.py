@@ -29,11 +29,11 @@ def test_minimal_file_gets_the_documented_defaults(tmp_path):
     scenario = load_scenario(path)
     assert scenario == Scenario(
         name="case", description="", system=(tmp_path / "fmus" / "SystemStructure.ssd").resolve(),
-        stop_time=2.0, base_step=0.005, steps={}, seed=1, parameters={}, outputs=[],
+        stop_time=2.0, base_step=0.01, steps={}, seed=1, parameters={}, outputs=[],
         master="gauss-seidel")
     assert isinstance(scenario.stop_time, float)
-    assert scenario.step("plant") == 0.005
-    assert scenario.step_count == 400
+    assert scenario.step("plant") == 0.01
+    assert scenario.step_count == 200
 
 
 def test_dotted_and_table_parameters_flatten_to_instance_dot_parameter(tmp_path):
@@ -123,9 +123,9 @@ def test_steps_must_be_integer_multiples_of_base_step(step, ok):
 
 
 def test_stop_time_must_be_a_whole_number_of_base_steps():
-    with pytest.raises(ConfigError, match=r"field 'stop_time': 1\.0025 is not an integer "
-                                          r"multiple of base_step 0\.005 \(ratio 200\.5\)"):
-        scenario_from_dict({"stop_time": 1.0025})
+    with pytest.raises(ConfigError, match=r"field 'stop_time': 1\.005 is not an integer "
+                                          r"multiple of base_step 0\.01 \(ratio 100\.5\)"):
+        scenario_from_dict({"stop_time": 1.005})
 
 
 def test_missing_system_file_and_bad_toml(tmp_path):
@@ -161,7 +161,7 @@ def test_overrides_merge_parameters_and_steps_and_revalidate():
                                seed=7)
     assert fast.parameters == {"source.path": "s_curve", "planner.mode": "curvature",
                                "planner.v_cruise": 0.4}
-    assert fast.steps["planner"] == 0.05 and fast.steps["plant"] == 0.005
+    assert fast.steps["planner"] == 0.05 and fast.steps["plant"] == 0.02
     assert fast.seed == 7 and base.seed == 1 and base.parameters["planner.v_cruise"] == 0.3
     with pytest.raises(ConfigError, match=r"field 'master': 'rk4' is not one of"):
         base.with_overrides(master="rk4")
@@ -200,10 +200,10 @@ def test_shipped_scenarios():
     assert sorted(loaded) == ["dynamic_case2", "s_curve", "static_case1", "straight"]
     for scenario in loaded.values():
         assert scenario.system == SSD.resolve()
-        assert scenario.base_step == 0.005
+        assert scenario.base_step == 0.01
         assert [scenario.step_ratio(i) for i in ("source", "localizer", "planner",
                                                  "controller_left", "controller_right",
-                                                 "plant")] == [2, 2, 4, 1, 1, 1]
+                                                 "plant")] == [1, 1, 2, 2, 2, 2]
     assert loaded["s_curve"].parameters["source.path"] == "s_curve"
     assert loaded["straight"].parameters["source.path"] == "straight"
     # Case 1: 2 m at 45 deg right of a robot at the origin facing +y.
