@@ -118,3 +118,29 @@ def test_libcosim_and_our_jacobi_master_agree(fmu_dir, tmp_path):
     difference = float(np.max(np.hypot(*(ours - theirs).T)))
     (tmp_path / "libcosim_difference.txt").write_text(f"{difference}\n")
     assert difference <= 1e-6
+
+
+def test_default_s_curve_scenario_meets_its_targets(fmu_dir, tmp_path):
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(REPO_ROOT / "scenarios" / "s_curve.toml")
+    result = run_scenario(scenario, tmp_path / "s_curve", progress=False, fmu_dir=fmu_dir,
+                          plots=False)
+    summary = result.summary
+    stop_distance = summary["stop_distance_m"]
+    # the robot follows the source to the end without touching it ...
+    assert summary["min_distance_to_source_m"] >= stop_distance / 2
+    # ... and stops within 0.3 m of stop_distance from it
+    assert abs(summary["final_distance_to_source_m"] - stop_distance) <= 0.3
+
+
+def test_cli_reports_a_bad_scenario_field_in_one_line(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\nstop_time = 5.0\nmaster = "rk4"\n')
+    completed = subprocess.run([sys.executable, "-m", "orchestrator.cli", "run", str(bad)],
+                               cwd=REPO_ROOT, capture_output=True, text=True, timeout=120)
+    assert completed.returncode != 0
+    lines = [line for line in completed.stderr.splitlines() if line.strip()]
+    assert "Traceback" not in completed.stderr
+    assert any("bad.toml" in line and "master" in line and "rk4" in line and "jacobi" in line
+               for line in lines)

@@ -72,3 +72,45 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(fmu_paths, name):
         # booleans arrive as bool from libcosim and as 0/1 from fmpy: compare as numbers
         assert [float(x) for x in a] == pytest.approx([float(x) for x in b], rel=0, abs=1e-12), \
             f"step {k}"
+
+
+WITH_INPUTS = [name for name in NAMES if name != "SoundSource"]
+
+
+@pytest.mark.parametrize("name", WITH_INPUTS, ids=WITH_INPUTS)
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")], ids=["nan", "inf"])
+def test_a_non_finite_input_gives_an_error_status_naming_port_and_value(fmu_paths, name, bad):
+    from fmpy.fmi1 import FMICallException
+
+    from orchestrator.fmu import FmuInstance
+
+    h, drive = DRIVES[name]
+    inputs = drive(0.0)
+    port = next(p for p, v in inputs.items() if isinstance(v, float))
+    instance = FmuInstance(fmu_paths[name], "bad_input")
+    instance.instantiate()
+    instance.set_values({**inputs, port: bad})
+    with pytest.raises(FMICallException) as caught:
+        instance.do_step(0.0, h)
+    assert caught.value.status in (2, 3)  # fmi2Discard or fmi2Error, never a crash
+    assert port in instance.last_error() and repr(bad) in instance.last_error()
+    # the host keeps running: the same instance takes good input again
+    instance.set_values(inputs)
+    instance.do_step(0.0, h)
+    instance.terminate()
+
+
+def test_plant_clamps_a_voltage_beyond_the_supply_and_logs_it_once(fmu_paths):
+    from orchestrator.fmu import FmuInstance
+
+    instance = FmuInstance(fmu_paths["RobotPlant"], "clamp")
+    instance.instantiate()
+    for k in range(5):
+        instance.set_values({"voltage_left": 30.0, "voltage_right": 11.1})
+        instance.do_step(k * 0.01, 0.01)
+    clamped = instance.get_values(["rim_speed_left", "rim_speed_right"])
+    warnings = [text for status, text in instance.messages if "voltage_left" in text]
+    instance.terminate()
+    assert len(warnings) == 1 and "30" in warnings[0]
+    # clamped to the 11.1 V supply: both wheels driven alike
+    assert clamped["rim_speed_left"] == pytest.approx(clamped["rim_speed_right"], rel=1e-9)
