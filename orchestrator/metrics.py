@@ -50,8 +50,9 @@ def tracking_summary(time, robot_xy, source_xy, stop_distance):
     -------
     dict
         ``final_distance_to_source_m``, ``final_position_error_m`` (|final distance -
-        stop_distance|), ``min_distance_to_source_m`` and ``path_rmse_m`` (RMS distance of the
-        robot's positions to the source's path, once the robot has started to move).
+        stop_distance|), ``min_distance_to_source_m`` and ``path_rmse_m``: the RMS distance of
+        the robot's positions (once it has started to move) to the reference path, which runs
+        from the robot's start to the source's start and then along the source's path.
     """
     robot_xy = np.asarray(robot_xy, dtype=float)
     source_xy = np.asarray(source_xy, dtype=float)
@@ -64,6 +65,7 @@ def tracking_summary(time, robot_xy, source_xy, stop_distance):
     path = source_xy[::max(1, len(source_xy) // 500)]
     if len(source_xy) and not np.array_equal(path[-1], source_xy[-1]):
         path = np.vstack([path, source_xy[-1:]])
+    path = np.vstack([robot_xy[:1], path])
     deviation = distance_to_polyline(on_path, path)
     return {
         "final_distance_to_source_m": float(distance[-1]),

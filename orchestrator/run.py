@@ -79,11 +79,21 @@ def _rates(system, scenario):
     return rates
 
 
+# Recorded whatever the scenario lists: the summary's figures are computed from them.
+_SUMMARY_COLUMNS = ("source.x", "source.y", "plant.x", "plant.y", "plant.heading")
+
+
 def _recorded_columns(system, scenario):
     if scenario.outputs:
         for name in scenario.outputs:
             system.variable(name)  # raises a ConfigError naming the valid variables
-        return list(scenario.outputs)
+        extra = [c for c in _SUMMARY_COLUMNS if c not in scenario.outputs]
+        for name in list(extra):
+            try:
+                system.variable(name)
+            except ConfigError:
+                extra.remove(name)
+        return list(scenario.outputs) + extra
     columns = []
     for component in system.components:
         for v in component.model_description.modelVariables:
