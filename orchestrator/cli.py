@@ -81,6 +81,36 @@ def _cmd_run(args):
 DEFAULT_SCENARIO = "scenarios/s_curve.toml"
 
 
+def _cmd_sweep(args):
+    from orchestrator.scenario import load_scenario
+    from orchestrator.sweep import parse_assignment, sweep
+
+    scenario_path = args.scenario or DEFAULT_SCENARIO
+    if not Path(scenario_path).is_file():
+        raise SonotrackError(f"scenario file {scenario_path} does not exist")
+    grid = dict(parse_assignment(text) for text in args.set or [])
+    seeds = _seeds(args.seeds) if args.seeds else None
+    out = Path(args.out) if args.out else Path("runs") / f"sweep_{Path(scenario_path).stem}"
+    result = sweep(load_scenario(scenario_path), grid, out, seeds=seeds, fmu_dir=args.fmu_dir,
+                   scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+    failed = [row for row in result.rows if row.get("status") != "ok"]
+    print(f"{len(result.rows)} runs ({result.computed} computed, {result.reused} reused), "
+          f"{len(failed)} failed")
+    print(f"table: {result.table_csv.resolve()}")
+    return 1 if failed else 0
+
+
+def _seeds(text):
+    """``1,2,5`` or ``1..10`` (inclusive) into a list of ints."""
+    try:
+        if ".." in text:
+            first, last = text.split("..", 1)
+            return list(range(int(first), int(last) + 1))
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise SonotrackError(f"--seeds {text!r}: expected 1,2,3 or 1..10") from None
+
+
 def _parser():
     parser = argparse.ArgumentParser(prog="sonotrack", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -106,6 +136,18 @@ def _parser():
                      help="simulated seconds between recorded rows (default 0.02)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
+
+    sweep = sub.add_parser("sweep", help="run a scenario over a parameter grid and seeds on Dask")
+    sweep.add_argument("scenario", nargs="?", help=f"TOML scenario (default: {DEFAULT_SCENARIO})")
+    sweep.add_argument("--set", action="append", metavar="INSTANCE.PARAM=V1,V2",
+                       help="parameter values to sweep (repeatable; all combinations run)")
+    sweep.add_argument("--seeds", help="seeds, e.g. 1,2,3 or 1..10 (default: the scenario's)")
+    sweep.add_argument("--out", help="sweep folder (default: runs/sweep_<scenario name>)")
+    sweep.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
+    sweep.add_argument("--scheduler", help="Dask scheduler address (default: a LocalCluster)")
+    sweep.add_argument("--workers", type=int, help="local worker processes (default: CPUs)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=_cmd_sweep)
 
     for register in _EXTRA_COMMANDS:
         register(sub)
