@@ -7,6 +7,8 @@ makes the waveform and its derivative continuous, so it is band-limited in pract
 below -31 dB) and its sampled derivative energy gives the Cramer-Rao bound directly.
 """
 
+import functools
+
 import numpy as np
 
 from ..common.errors import ParameterError
@@ -45,23 +47,25 @@ class ChirpBurst:
         self.band_high = float(band_high)
         self.duration = float(duration)
 
+    def _sweep(self):
+        return (self.band_high - self.band_low) / self.duration
+
     def _phase_terms(self, t):
         t = np.asarray(t, dtype=float)
         inside = (t >= 0.0) & (t <= self.duration)
-        sweep = (self.band_high - self.band_low) / self.duration
-        phase = 2.0 * np.pi * (self.band_low * t + 0.5 * sweep * t * t)
-        rate = 2.0 * np.pi * (self.band_low + sweep * t)
+        phase = 2.0 * np.pi * (self.band_low * t + 0.5 * self._sweep() * t * t)
         angle = 2.0 * np.pi * t / self.duration
-        return inside, phase, rate, angle
+        return inside, phase, angle
 
     def waveform(self, t):
         """Return the unit-amplitude burst at times ``t`` [s] (zero outside the burst)."""
-        inside, phase, _, angle = self._phase_terms(t)
+        inside, phase, angle = self._phase_terms(t)
         return np.where(inside, 0.5 * (1.0 - np.cos(angle)) * np.sin(phase), 0.0)
 
     def derivative(self, t):
         """Return the time derivative of :meth:`waveform` at ``t`` [1/s], analytically."""
-        inside, phase, rate, angle = self._phase_terms(t)
+        inside, phase, angle = self._phase_terms(t)
+        rate = 2.0 * np.pi * (self.band_low + self._sweep() * np.asarray(t, dtype=float))
         envelope = 0.5 * (1.0 - np.cos(angle))
         envelope_rate = np.pi / self.duration * np.sin(angle)
         value = envelope_rate * np.sin(phase) + envelope * rate * np.cos(phase)
@@ -69,8 +73,8 @@ class ChirpBurst:
 
     def mean_power(self, sample_rate):
         """Return the mean square of the unit burst over its duration, from samples at ``sample_rate``."""
-        t = np.arange(int(np.ceil(self.duration * sample_rate)) + 1) / sample_rate
-        return float(np.sum(self.waveform(t) ** 2) / (self.duration * sample_rate))
+        # Cached: the synthesis asks for it every burst.
+        return _mean_power(self.band_low, self.band_high, self.duration, float(sample_rate))
 
     def passband(self):
         """Return the band ``(low, high)`` [Hz] the estimator weights.
@@ -80,3 +84,10 @@ class ChirpBurst:
         """
         margin = 1.0 / self.duration
         return max(self.band_low - margin, 0.0), self.band_high + margin
+
+
+@functools.lru_cache(maxsize=32)
+def _mean_power(band_low, band_high, duration, sample_rate):
+    burst = ChirpBurst(band_low, band_high, duration)
+    t = np.arange(int(np.ceil(duration * sample_rate)) + 1) / sample_rate
+    return float(np.sum(burst.waveform(t) ** 2) / (duration * sample_rate))

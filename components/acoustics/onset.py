@@ -7,6 +7,8 @@ envelope peaks at the burst's start without the pre-echo a brick-wall band filte
 The delays themselves come from the pairwise GCC, which does not use the waveform.
 """
 
+import functools
+
 import numpy as np
 
 __all__ = ["detect_onsets"]
@@ -32,14 +34,38 @@ def detect_onsets(records, template, threshold_db):
         Shape (...,): the peak exceeds the threshold.
     """
     n = records.shape[-1]
+    template = np.ascontiguousarray(template, dtype=float)
+    n_fft, analytic_filter = _analytic_matched_filter(n, template.tobytes())
+    # The inverse of the positive-frequency half (zero-padded to n_fft) is the analytic signal.
+    analytic = np.fft.ifft(np.fft.rfft(records, n_fft, axis=-1) * analytic_filter, n_fft, axis=-1)
+    envelope = np.abs(analytic[..., : n - template.size + 1]) ** 2
+    peak = envelope.argmax(axis=-1)
+    floor = np.maximum(_median(envelope), np.finfo(float).tiny)
+    return peak, envelope.max(axis=-1) > floor * 10.0 ** (threshold_db / 10.0)
+
+
+@functools.lru_cache(maxsize=32)
+def _analytic_matched_filter(n, template_bytes):
+    """FFT size and the template's conjugate spectrum, positive frequencies doubled.
+
+    Keep positive frequencies only (doubled): the inverse is the analytic signal, whose
+    magnitude is the envelope without the carrier's oscillation. Cached by the template's
+    bytes: a localizer filters with the same burst every fix.
+    """
+    template = np.frombuffer(template_bytes, dtype=float)
     n_fft = 1 << int(np.ceil(np.log2(n + template.size)))
-    spectrum = np.fft.fft(records, n_fft, axis=-1) * np.conj(np.fft.fft(template, n_fft))
-    # Keep positive frequencies only (doubled): the inverse is the analytic signal, whose
-    # magnitude is the envelope without the carrier's oscillation.
-    spectrum[..., n_fft // 2 + 1:] = 0.0
-    spectrum[..., 1: n_fft // 2] *= 2.0
-    envelope = np.abs(np.fft.ifft(spectrum, axis=-1)[..., : n - template.size + 1]) ** 2
-    peak = np.argmax(envelope, axis=-1)
-    height = np.take_along_axis(envelope, peak[..., None], axis=-1)[..., 0]
-    floor = np.maximum(np.median(envelope, axis=-1), np.finfo(float).tiny)
-    return peak, height > floor * 10.0 ** (threshold_db / 10.0)
+    weights = np.full(n_fft // 2 + 1, 2.0)
+    weights[0] = weights[-1] = 1.0
+    analytic_filter = np.conj(np.fft.rfft(template, n_fft)) * weights
+    analytic_filter.setflags(write=False)
+    return n_fft, analytic_filter
+
+
+def _median(values):
+    """``np.median`` along the last axis by one partial sort (np.median's overhead is ~5x)."""
+    size = values.shape[-1]
+    half = size // 2
+    if size % 2:
+        return np.partition(values, half, axis=-1)[..., half]
+    part = np.partition(values, (half - 1, half), axis=-1)
+    return 0.5 * (part[..., half - 1] + part[..., half])

@@ -2,10 +2,16 @@
 
 import numpy as np
 
-from .gcc import estimate_delays
+from .gcc import estimate_pair_delays
 from .onset import detect_onsets
 
 __all__ = ["TdoaMeasurement", "measure_tdoas"]
+
+# Window rows, as the pairs (u, v) = (M1, M2) and (M3, M2): the microphone of each row, the
+# pair it belongs to, and the pairs' outer microphones.
+_ROW_MICS = np.array([0, 1, 2, 1])
+_PAIR_OF_ROW = np.array([0, 0, 1, 1])
+_OUTER_MICS = np.array([0, 2])
 
 
 class TdoaMeasurement:
@@ -31,18 +37,6 @@ class TdoaMeasurement:
         self.at_bound = at_bound
 
 
-def _gated_segments(records, starts, onsets, length, burst_samples, margin):
-    """Cut ``length`` samples from ``starts``, zeroed outside this record's own burst.
-
-    Samples outside ``[onset - margin, onset + burst + margin)`` hold only noise; left in,
-    their noise-times-noise products blur the correlation (the dominant error below ~10 dB).
-    """
-    index = starts[..., None] + np.arange(length)
-    segment = np.take_along_axis(records, index, axis=-1)
-    gate = (index >= (onsets - margin)[..., None]) & (index < (onsets + burst_samples + margin)[..., None])
-    return segment * gate
-
-
 def measure_tdoas(records, settings):
     """Measure ``(tdoa_12, tdoa_23)`` from records of shape (..., 3, n).
 
@@ -64,20 +58,19 @@ def measure_tdoas(records, settings):
     n = records.shape[-1]
     onsets, detected = detect_onsets(records, settings.template, settings.onset_threshold_db)
     length = settings.window_samples
-    latest = n - length
-    start_12 = np.clip(np.minimum(onsets[..., 0], onsets[..., 1]) - settings.pre_trigger_samples,
-                       0, latest)
-    start_32 = np.clip(np.minimum(onsets[..., 2], onsets[..., 1]) - settings.pre_trigger_samples,
-                       0, latest)
-    burst, margin = settings.template.size, settings.gate_margin_samples
-    u = np.stack([
-        _gated_segments(records[..., 0, :], start_12, onsets[..., 0], length, burst, margin),
-        _gated_segments(records[..., 2, :], start_32, onsets[..., 2], length, burst, margin)],
-        axis=-2)
-    centre = [_gated_segments(records[..., 1, :], start, onsets[..., 1], length, burst, margin)
-              for start in (start_12, start_32)]
-    v = np.stack(centre, axis=-2)
-    estimate = estimate_delays(u, v, settings.sample_rate, settings.passband, settings.max_lag,
-                               settings.weighting)
+    # Each pair's window starts pre_trigger before its earlier onset, clamped into the record.
+    first = np.minimum(onsets[..., _OUTER_MICS], onsets[..., 1:2])
+    pair_starts = np.minimum(np.maximum(first - settings.pre_trigger_samples, 0), n - length)
+    index = pair_starts[..., _PAIR_OF_ROW, None] + np.arange(length)
+    windows = np.take_along_axis(records[..., _ROW_MICS, :], index, axis=-1)
+    # Each record is zeroed outside its own burst's [onset - margin, onset + burst + margin):
+    # those samples hold only noise, and left in, their noise-times-noise products blur the
+    # correlation (the dominant error below ~10 dB).
+    own_onset = onsets[..., _ROW_MICS, None]
+    margin = settings.gate_margin_samples
+    gate = (index >= own_onset - margin) & (index < own_onset + (settings.template.size + margin))
+    pairs = (windows * gate).reshape(windows.shape[:-2] + (2, 2, length))
+    estimate = estimate_pair_delays(pairs, settings.sample_rate, settings.passband,
+                                    settings.max_lag, settings.weighting)
     return TdoaMeasurement(estimate.delay[..., 0], estimate.delay[..., 1], estimate.quality,
                            detected.all(axis=-1), estimate.at_bound.any(axis=-1))
