@@ -75,7 +75,7 @@ class PositionEstimator:
         tdoa_12 = np.asarray(tdoa_12, dtype=float)
         tdoa_23 = np.asarray(tdoa_23, dtype=float)
         for port, value in (("tdoa_12", tdoa_12), ("tdoa_23", tdoa_23)):
-            if not np.all(np.isfinite(value)):
+            if not np.isfinite(value).all():
                 bad = value[~np.isfinite(value)].ravel()[0] if value.ndim else value
                 raise InputError(f"{self.name} estimator: {port} = {float(bad)!r} s is not finite")
         a = self.speed_of_sound * tdoa_12
@@ -93,6 +93,11 @@ class PositionEstimator:
         raise NotImplementedError
 
 
+def _unit_clamp(x):
+    """``np.clip(x, -1, 1)`` at a fraction of its call overhead (it runs every fix)."""
+    return np.minimum(np.maximum(x, -1.0), 1.0)
+
+
 def _exact_range(a, b, spacing):
     return (2.0 * spacing**2 - a * a - b * b) / (2.0 * (a + b))
 
@@ -103,8 +108,8 @@ def far_field_pair_bearings(a, b, spacing):
     Eq. (5) gives the angle from the array axis, ``acos(c dt / l)``; M1 is on the left, so pair
     M1-M2 gives ``bearing = theta_1 - pi/2`` and pair M2-M3 gives ``bearing = pi/2 - theta_2``.
     """
-    theta_1 = np.arccos(np.clip(a / spacing, -1.0, 1.0))
-    theta_2 = np.arccos(np.clip(b / spacing, -1.0, 1.0))
+    theta_1 = np.arccos(_unit_clamp(a / spacing))
+    theta_2 = np.arccos(_unit_clamp(b / spacing))
     return theta_1 - 0.5 * np.pi, 0.5 * np.pi - theta_2
 
 
@@ -118,7 +123,7 @@ class ExactNearField(PositionEstimator):
         distance = _exact_range(a, b, spacing)
         sine = (b - a) * (2.0 * distance + a + b) / (4.0 * spacing * distance)
         consistent = (a + b > 0.0) & (distance > 0.0) & (np.abs(sine) <= 1.0)
-        return distance, np.arcsin(np.clip(sine, -1.0, 1.0)), consistent
+        return distance, np.arcsin(_unit_clamp(sine)), consistent
 
 
 class PaperEq4(PositionEstimator):
