@@ -11,6 +11,7 @@ import functools
 import numpy as np
 
 from ..common.errors import ParameterError
+from ._rows import row_offsets
 
 __all__ = ["WEIGHTINGS", "DelayEstimate", "estimate_delays", "estimate_pair_delays"]
 
@@ -153,7 +154,8 @@ def estimate_pair_delays(pairs, sample_rate, passband, max_lag, weighting="band"
     # Parabola through the peak and its neighbours (clamped at the bound) as Newton's start.
     inner = np.minimum(np.maximum(peak, 1), lags.size - 2)
     at_bound = inner != peak
-    neighbours = np.take_along_axis(correlation, inner[..., None] + _NEIGHBOURS, axis=-1)
+    index = row_offsets(correlation.shape) + inner[..., None] + _NEIGHBOURS
+    neighbours = correlation.reshape(-1)[index]
     left, centre, right = neighbours[..., 0], neighbours[..., 1], neighbours[..., 2]
     curvature = left - 2.0 * centre + right
     offset = np.divide(0.5 * (left - right), curvature, out=np.zeros_like(curvature),

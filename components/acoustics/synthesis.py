@@ -14,6 +14,8 @@ import functools
 
 import numpy as np
 
+from ._rows import row_offsets
+
 __all__ = ["REFERENCE_DISTANCE", "REFERENCE_AMPLITUDE", "noise_std", "quantisation_step",
            "synthesise_records", "record_length"]
 
@@ -98,7 +100,8 @@ def _delayed_bursts(burst, gains, arrivals, start, sample_rate, n_samples):
     index = np.minimum(np.maximum(first, 0), n_samples - span)[..., None] + np.arange(span)
     times = start[..., None, None] + sample_times[index] - arrivals[..., None]
     clean = np.zeros(arrivals.shape + (n_samples,))
-    np.put_along_axis(clean, index, gains[..., None] * burst.waveform(times), axis=-1)
+    # A fresh C-contiguous array: reshape(-1) is a view, so this writes into it.
+    clean.reshape(-1)[row_offsets(clean.shape) + index] = gains[..., None] * burst.waveform(times)
     return clean
 
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ._rows import row_offsets
 from .gcc import estimate_pair_delays
 from .onset import detect_onsets
 
@@ -62,7 +63,8 @@ def measure_tdoas(records, settings):
     first = np.minimum(onsets[..., _OUTER_MICS], onsets[..., 1:2])
     pair_starts = np.minimum(np.maximum(first - settings.pre_trigger_samples, 0), n - length)
     index = pair_starts[..., _PAIR_OF_ROW, None] + np.arange(length)
-    windows = np.take_along_axis(records[..., _ROW_MICS, :], index, axis=-1)
+    records = np.ascontiguousarray(records)
+    windows = records.reshape(-1)[row_offsets(records.shape)[..., _ROW_MICS, :] + index]
     # Each record is zeroed outside its own burst's [onset - margin, onset + burst + margin):
     # those samples hold only noise, and left in, their noise-times-noise products blur the
     # correlation (the dominant error below ~10 dB).
