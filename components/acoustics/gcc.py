@@ -45,7 +45,7 @@ class DelayEstimate:
 
 
 class _Grid:
-    """Constants of one GCC configuration (window length, rate, band, lag bound); read-only arrays."""
+    """Constants of one GCC set-up (window length, rate, band, lag bound); read-only arrays."""
 
     def __init__(self, n, sample_rate, low, high, max_lag):
         self.n_fft = 1 << int(np.ceil(np.log2(2 * n)))
@@ -107,10 +107,10 @@ def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
 
 
 def estimate_pair_delays(pairs, sample_rate, passband, max_lag, weighting="band"):
-    """:func:`estimate_delays` for windows already stacked as ``pairs[..., 0, :] = u``, ``[..., 1, :] = v``.
+    """Estimate the delay of ``pairs[..., 0, :]`` relative to ``pairs[..., 1, :]``.
 
-    Both windows go through one FFT call (each call has a fixed cost comparable to its work
-    at these sizes).
+    :func:`estimate_delays` on windows already stacked: both go through one FFT call (each
+    call has a fixed cost comparable to its work at these sizes).
 
     Parameters
     ----------

@@ -32,7 +32,8 @@ def model_records(n_samples, ranges=RANGES):
 
 # 568: the localizer's record; 150: the burst runs past the record's end; 60: the record is
 # shorter than the burst (the synthesis then evaluates the burst on every sample).
-@pytest.mark.parametrize("n_samples", [568, 150, 60], ids=["full", "burst_cut", "shorter_than_burst"])
+@pytest.mark.parametrize("n_samples", [568, 150, 60],
+                         ids=["full", "burst_cut", "shorter_than_burst"])
 def test_noise_free_records_follow_the_model(n_samples):
     # At 300 dB the noise (~1e-16) is far below half an ADC step: the records are the model's.
     np.testing.assert_array_equal(synthesise(n_samples), model_records(n_samples))
