@@ -1,0 +1,120 @@
+"""The sampled wheel-loop model of the verification report against independent references."""
+
+import argparse
+
+import control
+import numpy as np
+import pytest
+
+from components.control import DEFAULTS
+from components.plant import PlantParameters, steady_wheel_speed
+from orchestrator.verification import (
+    WheelLoopModel, analyse_gains, continuous_gain_bound, controller_cross_check,
+    linear_wheel_model, register_cli, stability_boundary,
+)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return WheelLoopModel()
+
+
+def test_dc_gain_equals_the_plant_cores_steady_state(model):
+    p = PlantParameters()
+    per_volt = steady_wheel_speed(1.0, p) * p.wheel_radius  # rim speed per volt
+    linear = linear_wheel_model(p)
+    assert linear.dc_gain == pytest.approx(per_volt, rel=1e-12)
+    assert control.dcgain(linear.transfer_function()) == pytest.approx(per_volt, rel=1e-12)
+    # Sampling and window averaging keep the DC gain.
+    for num, den in ((model.rim_num, model.rim_den), (model.meas_num, model.meas_den)):
+        assert np.polyval(num, 1.0) / np.polyval(den, 1.0) == pytest.approx(per_volt, rel=1e-9)
+    # ... and the controller's feedforward constant is its inverse (zero steady-state error).
+    assert DEFAULTS["volts_per_speed"] * per_volt == pytest.approx(1.0, rel=1e-12)
+
+
+def test_documented_linear_model_figures():
+    # docs/plant.md: M_eff = 2.436 kg, K_f = 3.375 N/A, K_e = 4.219 V s/m, tau = 0.39 s.
+    linear = linear_wheel_model()
+    assert linear.effective_mass == pytest.approx(2.436, abs=1e-3)
+    assert linear.force_per_current == pytest.approx(3.375, abs=1e-3)
+    assert linear.emf_per_speed == pytest.approx(4.219, abs=1e-3)
+    electrical, mechanical = linear.time_constants
+    assert mechanical == pytest.approx(0.39, abs=0.005)
+    assert electrical == pytest.approx(1.0e-3, rel=0.01)
+
+
+def test_rim_sampling_matches_python_control_zoh(model):
+    sampled = control.sample_system(model.linear.transfer_function(), model.period, "zoh")
+    ours = control.tf(model.rim_num, model.rim_den, model.period)
+    w = np.linspace(0.1, np.pi / model.period * 0.99, 50)
+    np.testing.assert_allclose(ours(np.exp(1j * w * model.period)),
+                               sampled(np.exp(1j * w * model.period)), rtol=1e-8)
+
+
+def test_measured_speed_is_the_window_average_of_the_rim_speed(model):
+    # Independent reference: integrate the continuous step response numerically.
+    fine = np.linspace(0.0, 0.4, 40001)
+    rim = control.step_response(model.linear.transfer_function(), fine).outputs
+    steps = int(round(0.4 / model.period))
+    per = (fine.size - 1) // steps
+    windows = [slice(k * per, (k + 1) * per + 1) for k in range(steps)]
+    averages = [0.0] + [np.trapezoid(rim[w], fine[w]) / model.period for w in windows]
+    times = np.arange(steps + 1) * model.period
+    measured = control.step_response(control.tf(model.meas_num, model.meas_den, model.period),
+                                     times).outputs
+    np.testing.assert_allclose(measured, averages, atol=1e-8)
+
+
+@pytest.mark.parametrize("kd,ki", [(0.3, 0.0), (2.0, 0.0), (1.0, 0.5)],
+                         ids=["kd_min", "kd_max", "pid"])
+def test_routh_boundary_equals_numeric_roots(model, kd, ki):
+    edge = stability_boundary(model, kd, ki, samples=300)
+    assert edge["kp_routh"] is not None and edge["kp_roots"] is not None
+    assert edge["kp_routh"] == pytest.approx(edge["kp_roots"], rel=1e-6)
+    # Independent of both searches: just inside the edge stable, just outside not.
+    base, per_kp = model.characteristic_in_kp(kd, ki)
+    for factor, stable in ((1 - 1e-4, True), (1 + 1e-4, False)):
+        roots = np.roots(np.polyadd(base, factor * edge["kp_roots"] * per_kp))
+        assert (np.max(np.abs(roots)) < 1.0) == stable
+
+
+@pytest.mark.parametrize("kp,kd,stable", [(3.5, 1.15, True), (4.0, 2.0, True), (60.0, 1.0, False),
+                                          (3.0, 60.0, False)],
+                         ids=["paper-middle", "paper-corner", "kp-too-high", "kd-too-high"])
+def test_known_gains_are_classified_right(model, kp, kd, stable):
+    result = analyse_gains(model, kp, kd)
+    assert result.stable_routh == stable
+    assert result.stable_roots == stable
+
+
+def test_margins_agree_with_the_boundary(model):
+    # The gain margin scales the whole controller; with kd scaled too the edge must match.
+    result = analyse_gains(model, 3.0, 0.3)
+    scaled = model.characteristic_polynomial(3.0 * result.gain_margin, 0.3 * result.gain_margin)
+    assert np.max(np.abs(np.roots(scaled))) == pytest.approx(1.0, abs=1e-6)
+
+
+def test_transfer_function_is_the_implemented_controller(model):
+    # The real WheelSpeedController on the sampled plant gives the TF's step response.
+    assert controller_cross_check(model, 3.5, 1.15) < 1e-12
+    assert controller_cross_check(model, 3.0, 1.0, 0.5) < 1e-12
+
+
+def test_continuous_pd_has_no_finite_routh_bound(model):
+    bound = continuous_gain_bound(model, kd=1.0, kp_max=1e5)
+    assert bound["intervals"] == [(0.0, 1e5)]
+    assert all(v > 0 for v in bound["routh_first_column_at_kp_max"])
+
+
+def test_jacobi_delay_lowers_the_bound(model):
+    jacobi = WheelLoopModel(extra_delay=1)
+    assert (stability_boundary(jacobi, 1.0, samples=300)["kp_routh"]
+            < stability_boundary(model, 1.0, samples=300)["kp_routh"])
+
+
+def test_register_cli_adds_verify_with_default_out_dir():
+    parser = argparse.ArgumentParser(prog="sonotrack")
+    register_cli(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["verify"])
+    assert args.out == "runs/verify" and args.grid == 11 and callable(args.func)
+    assert parser.parse_args(["verify", "--out", "x"]).out == "x"
