@@ -84,11 +84,8 @@ def single_fmu_fmpy(path, inputs, step, stop):
 def single_rate_ssd(fmu_dir):
     from orchestrator.ssp import read_ssd, write_ssd
 
-    description = read_ssd(SSD)
-    single = type(description)(**{**description.__dict__, "components": [
-        type(c)(**{**c.__dict__, "step_size_hint": None}) for c in description.components]})
     path = Path(fmu_dir) / "SingleRate.ssd"
-    write_ssd(path, single)
+    write_ssd(path, read_ssd(SSD).without_step_hints())
     return path
 
 

@@ -206,6 +206,15 @@ class SystemDescription:
         """Directory against which component sources resolve (cwd if the path is unknown)."""
         return self.path.parent if self.path is not None else Path.cwd()
 
+    def without_step_hints(self):
+        """Return a copy whose components carry no step-size hint (a single-rate system).
+
+        libcosim runs every component at its own hinted step; without hints, all step at the
+        execution's step, which is what a single-rate comparison needs.
+        """
+        return replace(self, components=[replace(c, step_size_hint=None)
+                                         for c in self.components])
+
     def with_source_prefix(self, prefix):
         """Return a copy whose component sources are prefixed, e.g. with ``"resources/"``.
 
