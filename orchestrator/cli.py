@@ -154,7 +154,13 @@ def _parser():
     return parser
 
 
-_EXTRA_COMMANDS = []
+def _register_verify(sub):
+    from orchestrator.verification import register_cli
+
+    register_cli(sub)
+
+
+_EXTRA_COMMANDS = [_register_verify]
 
 
 def main(argv=None):
