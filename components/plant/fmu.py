@@ -33,6 +33,7 @@ _REAL_PARAMETERS = (
     ("y0", "m", "start y of the axle midpoint"),
     ("heading0", "rad", "start heading, counter-clockwise from +x"),
     ("max_substep", "s", "longest internal integration step"),
+    ("substep_tolerance", "m/s", "tyre linearisation defect per substep above which it is split"),
 )
 
 # Output port -> (unit, description, core attribute). Every output is a state or a function of

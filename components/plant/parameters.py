@@ -12,7 +12,7 @@ _POSITIVE = (
     "mass", "yaw_inertia", "wheel_radius", "track_width", "wheel_inertia",
     "motor_resistance", "motor_inductance", "torque_constant", "back_emf_constant",
     "rotor_inertia", "gear_ratio", "speed_window", "mu", "slip_stiffness",
-    "slip_speed_floor", "v_supply", "gravity", "max_substep",
+    "slip_speed_floor", "v_supply", "gravity", "max_substep", "substep_tolerance",
 )
 
 
@@ -66,6 +66,10 @@ class PlantParameters:
         Start pose [m, m, rad]; heading counter-clockwise from +x.
     max_substep : float
         Longest internal integration step [s].
+    substep_tolerance : float
+        Largest linearisation defect of the tyre forces on one substep, expressed as the body
+        speed change it would cause (``h |defect| / mass``) [m/s]; a substep that exceeds it
+        is redone in up to 16 equal pieces.
     """
 
     mass: float = 4.5
@@ -91,7 +95,8 @@ class PlantParameters:
     x0: float = 0.0
     y0: float = 0.0
     heading0: float = math.pi / 2
-    max_substep: float = 1.0e-3
+    max_substep: float = 2.0e-3
+    substep_tolerance: float = 1.0e-4
 
     def validate(self):
         """Raise :class:`ParameterError` listing every invalid parameter at once."""
