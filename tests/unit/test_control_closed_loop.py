@@ -20,7 +20,16 @@ def results():
     return wheel_loop.compare(configs)
 
 
-@pytest.mark.parametrize("side", ["left", "right"], ids=["left", "right"])
+_CLAIM_NOT_SUPPORTED = (
+    "Paper claim not supported on the right wheel: with the second-order (ROS2) plant "
+    "integration, fgs_pd overshoots 3.345 % against 3.301 % for PID with feedforward; both are "
+    "set by the encoder-quantisation limit cycle, not by a transient (docs/control.md). The "
+    "earlier pass came from the first-order plant's integration error. Reported, not tuned.")
+
+
+@pytest.mark.parametrize("side", [
+    "left", pytest.param("right", marks=pytest.mark.xfail(strict=True, reason=_CLAIM_NOT_SUPPORTED)),
+], ids=["left", "right"])
 def test_fgs_pd_overshoots_no_more_than_pid(results, side):
     assert (results["fgs_pd"][side]["overshoot_percent"]
             <= results["pid"][side]["overshoot_percent"])
