@@ -204,15 +204,15 @@ class LocalizerCore:
             mics = microphone_positions(robot_x, robot_y, robot_heading, s.mic_spacing,
                                         s.array_offset)
             ranges = np.hypot(source_x - mics[:, 0], source_y - mics[:, 1])
-            fixes = locate_bursts(s, self.estimator, ranges[None, :], self.rng)
-            status = int(fixes.status[0])
-            self.peak_quality = float(fixes.quality[0])
+            # One burst, unbatched: the measurement slices its windows instead of indexing.
+            fixes = locate_bursts(s, self.estimator, ranges, self.rng)
+            status = int(fixes.status)
+            self.peak_quality = float(fixes.quality)
             if status == FixStatus.OK:
-                distance, bearing = robot_polar(fixes.distance[0], fixes.bearing[0],
-                                                s.array_offset)
+                distance, bearing = robot_polar(fixes.distance, fixes.bearing, s.array_offset)
                 self.distance, self.bearing = float(distance), float(bearing)
-                self.tdoa_12 = float(fixes.tdoa_12[0])
-                self.tdoa_23 = float(fixes.tdoa_23[0])
+                self.tdoa_12 = float(fixes.tdoa_12)
+                self.tdoa_23 = float(fixes.tdoa_23)
                 self.measurement_id += 1
         self.fix_status = int(status)
         self.valid = status == FixStatus.OK

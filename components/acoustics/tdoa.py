@@ -56,23 +56,51 @@ def measure_tdoas(records, settings):
     -------
     TdoaMeasurement
     """
-    n = records.shape[-1]
     onsets, detected = detect_onsets(records, settings.template, settings.onset_threshold_db)
-    length = settings.window_samples
-    # Each pair's window starts pre_trigger before its earlier onset, clamped into the record.
+    if records.ndim == 2 and records.shape[-1] >= settings.window_samples:
+        pairs = _pair_windows_single(records, onsets.tolist(), settings)
+    else:
+        pairs = _pair_windows(records, onsets, settings)
+    estimate = estimate_pair_delays(pairs, settings.sample_rate, settings.passband,
+                                    settings.max_lag, settings.weighting)
+    return TdoaMeasurement(estimate.delay[..., 0], estimate.delay[..., 1], estimate.quality,
+                           detected.all(axis=-1), estimate.at_bound.any(axis=-1))
+
+
+def _pair_windows(records, onsets, settings):
+    """Return the gated windows ``[[M1, M2], [M3, M2]]`` of each burst, shape (..., 2, 2, length).
+
+    Each pair's window starts ``pre_trigger`` before its earlier onset, clamped into the
+    record. Each record is zeroed outside its own burst's ``[onset - margin, onset + burst +
+    margin)``: those samples hold only noise, and left in, their noise-times-noise products
+    blur the correlation (the dominant error below ~10 dB).
+    """
+    n, length = records.shape[-1], settings.window_samples
     first = np.minimum(onsets[..., _OUTER_MICS], onsets[..., 1:2])
     pair_starts = np.minimum(np.maximum(first - settings.pre_trigger_samples, 0), n - length)
     index = pair_starts[..., _PAIR_OF_ROW, None] + np.arange(length)
     records = np.ascontiguousarray(records)
     windows = records.reshape(-1)[row_offsets(records.shape)[..., _ROW_MICS, :] + index]
-    # Each record is zeroed outside its own burst's [onset - margin, onset + burst + margin):
-    # those samples hold only noise, and left in, their noise-times-noise products blur the
-    # correlation (the dominant error below ~10 dB).
     own_onset = onsets[..., _ROW_MICS, None]
     margin = settings.gate_margin_samples
     gate = (index >= own_onset - margin) & (index < own_onset + (settings.template.size + margin))
-    pairs = (windows * gate).reshape(windows.shape[:-2] + (2, 2, length))
-    estimate = estimate_pair_delays(pairs, settings.sample_rate, settings.passband,
-                                    settings.max_lag, settings.weighting)
-    return TdoaMeasurement(estimate.delay[..., 0], estimate.delay[..., 1], estimate.quality,
-                           detected.all(axis=-1), estimate.at_bound.any(axis=-1))
+    return (windows * gate).reshape(windows.shape[:-2] + (2, 2, length))
+
+
+def _pair_windows_single(records, onsets, settings):
+    """:func:`_pair_windows` for one burst (records (3, n), onsets a list of 3 ints), by slicing.
+
+    The same windows without the index arithmetic: a fix's arrays are so small that numpy's
+    per-call overhead, not the work, sets the cost.
+    """
+    length, margin = settings.window_samples, settings.gate_margin_samples
+    latest = records.shape[-1] - length
+    pairs = np.zeros((2, 2, length))
+    for pair, outer in enumerate((0, 2)):
+        start = min(max(min(onsets[outer], onsets[1]) - settings.pre_trigger_samples, 0), latest)
+        for side, mic in enumerate((outer, 1)):
+            low = max(start, onsets[mic] - margin)
+            high = min(start + length, onsets[mic] + settings.template.size + margin)
+            if high > low:
+                pairs[pair, side, low - start:high - start] = records[mic, low:high]
+    return pairs

@@ -1,10 +1,13 @@
-"""Synthesised records and burst onsets against the signal model written out independently."""
+"""Synthesised records, burst onsets and delays against the signal model and exact geometry."""
+
+import math
 
 import numpy as np
 import pytest
 
 from components.acoustics import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE, ChirpBurst,
-                                  detect_onsets, quantisation_step, synthesise_records)
+                                  LocalizerSettings, detect_onsets, exact_tdoas,
+                                  measure_tdoas, quantisation_step, synthesise_records)
 from components.acoustics.onset import _median
 
 FS = 100e3
@@ -72,3 +75,31 @@ def test_noise_alone_is_not_detected():
 def test_median_matches_numpy(size):
     values = np.random.default_rng(size).exponential(size=(2, 3, size))
     np.testing.assert_array_equal(_median(values), np.median(values, axis=-1))
+
+
+def test_one_burst_measures_as_in_a_batch_and_near_the_exact_delays():
+    # A single burst (records (3, n)) takes the sliced window path, a batch the indexed one.
+    # 85 deg at 1 m puts M3's gate past its pair's window end (the gate is cut there).
+    settings = LocalizerSettings(snr_db=30.0)
+    geometry = [(1.0, 0.0), (2.0, 30.0), (3.0, -60.0), (1.0, 85.0), (4.5, -20.0)]
+    mics = np.array([[0.0, 0.4], [0.0, 0.0], [0.0, -0.4]])    # (forward, left) of M1, M2, M3
+    sources = np.array([[d * math.cos(math.radians(b)), d * math.sin(math.radians(b))]
+                        for d, b in geometry])
+    ranges = np.hypot(sources[:, None, 0] - mics[:, 0], sources[:, None, 1] - mics[:, 1])
+    records = synthesise_records(
+        settings.burst, ranges, sample_rate=settings.sample_rate,
+        speed_of_sound=settings.speed_of_sound, snr_db=settings.snr_db,
+        adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
+        n_samples=settings.record_samples, rng=np.random.default_rng(2))
+    batch = measure_tdoas(records, settings)
+    for i, (distance, bearing) in enumerate(geometry):
+        one = measure_tdoas(records[i], settings)
+        assert float(one.tdoa_12) == pytest.approx(batch.tdoa_12[i], rel=1e-12, abs=1e-18)
+        assert float(one.tdoa_23) == pytest.approx(batch.tdoa_23[i], rel=1e-12, abs=1e-18)
+        np.testing.assert_allclose(one.quality, batch.quality[i], rtol=1e-12)
+        assert bool(one.at_bound) == batch.at_bound[i]
+        assert bool(one.detected) and batch.detected[i]
+        true_12, true_23 = exact_tdoas(distance, math.radians(bearing), 0.4, 340.0)
+        # 0.1 sample: several times the 30 dB error here (<= 0.035 sample).
+        assert float(one.tdoa_12) == pytest.approx(true_12, abs=1e-6)
+        assert float(one.tdoa_23) == pytest.approx(true_23, abs=1e-6)
