@@ -160,7 +160,13 @@ def _register_verify(sub):
     register_cli(sub)
 
 
-_EXTRA_COMMANDS = [_register_verify]
+def _register_reproduce(sub):
+    from orchestrator.reproduce import register_cli
+
+    register_cli(sub)
+
+
+_EXTRA_COMMANDS = [_register_verify, _register_reproduce]
 
 
 def main(argv=None):

@@ -22,3 +22,20 @@ def fmu_paths(fmu_dir):
 @pytest.fixture(scope="session")
 def repo_root():
     return REPO_ROOT
+
+
+@pytest.fixture(scope="session", autouse=True)
+def keep_fmu_binaries_loaded():
+    """Stop fmpy from unloading FMU binaries inside the test process.
+
+    ``fmpy.simulate_fmu`` frees each FMU's shared library when it is done; unloading a
+    pythonfmu binary inside a Python host leaves the interpreter liable to crash later (seen
+    as segfaults in unrelated tests). :class:`orchestrator.fmu.FmuInstance` never unloads; this
+    keeps direct ``simulate_fmu`` calls in tests equally safe.
+    """
+    from fmpy.fmi1 import _FMU
+
+    original = _FMU.freeLibrary
+    _FMU.freeLibrary = lambda self: None
+    yield
+    _FMU.freeLibrary = original

@@ -89,11 +89,8 @@ def same_bits(a, b):
                for x, y in zip(a, b)) and len(a) == len(b)
 
 
-def run_libcosim(path, drive, h, steps, parameters=None):
-    """Step one FMU in libcosim feeding ``drive(t)``; return its outputs after each step.
-
-    Rows have the same layout as :func:`step_and_record` (Real, Integer, Boolean outputs).
-    """
+_LIBCOSIM = textwrap.dedent('''
+    import json, sys
     from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -101,9 +98,10 @@ def run_libcosim(path, drive, h, steps, parameters=None):
     from libcosimpy.CosimObserver import CosimObserver
     from libcosimpy.CosimSlave import CosimLocalSlave
 
+    job = json.loads(sys.stdin.read())
     log_output_level(CosimLogLevel.ERROR)
-    execution = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))
-    index = execution.add_local_slave(CosimLocalSlave(fmu_path=str(path), instance_name="fmu"))
+    execution = CosimExecution.from_step_size(step_size=int(round(job["h"] * 1e9)))
+    index = execution.add_local_slave(CosimLocalSlave(fmu_path=job["path"], instance_name="fmu"))
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
     manipulator = CosimManipulator.create_override()
@@ -111,7 +109,7 @@ def run_libcosim(path, drive, h, steps, parameters=None):
     variables = {v.name.decode(): v for v in execution.slave_variables(index)}
     kind = {CosimVariableType.REAL.value: "Real", CosimVariableType.INTEGER.value: "Integer",
             CosimVariableType.BOOLEAN.value: "Boolean", CosimVariableType.STRING.value: "String"}
-    for name, value in (parameters or {}).items():
+    for name, value in job["parameters"].items():
         variable = variables[name]
         setter = {"Real": execution.real_initial_value, "Integer": execution.integer_initial_value,
                   "Boolean": execution.boolean_initial_value,
@@ -119,7 +117,7 @@ def run_libcosim(path, drive, h, steps, parameters=None):
         setter(index, variable.reference, value)
     outputs = {"Real": [], "Integer": [], "Boolean": []}
     for name, variable in variables.items():
-        if variable.causality == CosimVariableCausality.OUTPUT.value and \
+        if variable.causality == CosimVariableCausality.OUTPUT.value and \\
                 kind[variable.type] in outputs:
             outputs[kind[variable.type]].append(variable.reference)
     readers = {"Real": observer.last_real_values, "Integer": observer.last_integer_values,
@@ -127,8 +125,8 @@ def run_libcosim(path, drive, h, steps, parameters=None):
     writers = {"Real": manipulator.slave_real_values, "Integer": manipulator.slave_integer_values,
                "Boolean": manipulator.slave_boolean_values}
     rows = []
-    for k in range(steps):
-        for name, value in drive(k * h).items():
+    for inputs in job["inputs"]:
+        for name, value in inputs.items():
             variable = variables[name]
             writers[kind[variable.type]](index, [variable.reference], [value])
         execution.step(1)
@@ -136,5 +134,22 @@ def run_libcosim(path, drive, h, steps, parameters=None):
         for type_name in ("Real", "Integer", "Boolean"):
             if outputs[type_name]:
                 row += list(readers[type_name](index, outputs[type_name]))
-        rows.append(tuple(row))
-    return rows
+        rows.append(row)
+    print(json.dumps(rows))
+''')
+
+
+def run_libcosim(path, drive, h, steps, parameters=None):
+    """Step one FMU in libcosim feeding ``drive(t)``; return its outputs after each step.
+
+    Rows have the same layout as :func:`step_and_record` (Real, Integer, Boolean outputs).
+    libcosim runs in a child process: when it releases an execution it unloads the FMU's
+    binary, and unloading a pythonfmu binary inside a Python host leaves that interpreter
+    liable to crash later (seen as segfaults in unrelated tests).
+    """
+    job = {"path": str(path), "h": h, "parameters": parameters or {},
+           "inputs": [drive(k * h) for k in range(steps)]}
+    completed = subprocess.run([sys.executable, "-c", _LIBCOSIM], input=json.dumps(job),
+                               capture_output=True, text=True, timeout=600)
+    assert completed.returncode == 0, completed.stderr[-2000:]
+    return [tuple(row) for row in json.loads(completed.stdout.strip().splitlines()[-1])]
