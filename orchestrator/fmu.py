@@ -69,6 +69,7 @@ class FmuInstance:
                                 instanceName=instance_name)
         self._callbacks = self._make_callbacks()
         self._instantiated = False
+        self._fatal = False
         self._do_step = self._raw("fmi2DoStep")
 
     # ----- life cycle ------------------------------------------------------------------------
@@ -104,11 +105,24 @@ class FmuInstance:
         """
         self._slave.instantiate(callbacks=self._callbacks, loggingOn=True)
         self._instantiated = True
-        self._slave.setupExperiment(startTime=start_time, stopTime=stop_time)
-        self._slave.enterInitializationMode()
-        if parameters:
-            self.set_values(parameters)
-        self._slave.exitInitializationMode()
+        try:
+            self._slave.setupExperiment(startTime=start_time, stopTime=stop_time)
+            self._slave.enterInitializationMode()
+            if parameters:
+                self.set_values(parameters)
+            self._slave.exitInitializationMode()
+        except Exception as exc:
+            self._note_failure(exc)
+            raise
+
+    def _note_failure(self, exc):
+        """Remember an fmi2Fatal: after it the FMU may not be called again, not even freed.
+
+        (pythonfmu 0.7.0 releases the Python objects of an instance when it reports fmi2Fatal
+        and again when the instance is freed; freeing it anyway corrupts the interpreter.)
+        """
+        if getattr(exc, "status", None) == 4:
+            self._fatal = True
 
     def terminate(self):
         """Terminate and free the instance (safe to call twice).
@@ -117,12 +131,13 @@ class FmuInstance:
         in the same process makes the next instantiation fail (seen with pythonfmu 0.7.0),
         and fmpy's ``freeInstance`` would unload it.
         """
-        if self._instantiated:
+        if self._instantiated and not self._fatal:
             self._instantiated = False
             try:
                 self._slave.terminate()
             finally:
                 self._slave.fmi2FreeInstance(self._slave.component)
+        self._instantiated = False
 
     # ----- access by name (set-up and tests; not for the hot loop) ----------------------------
     def variable(self, name):
@@ -168,6 +183,8 @@ class FmuInstance:
         if status > 1:  # above fmi2Warning
             from fmpy.fmi1 import FMICallException
 
+            if status == 4:
+                self._fatal = True
             raise FMICallException(function=function, status=status)
 
     def port_group(self, type_name, names):
