@@ -65,8 +65,14 @@ def _cmd_run(args):
         raise SonotrackError(f"scenario file {scenario} does not exist; shipped scenarios: "
                              f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
-    result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
-                          fmu_dir=args.fmu_dir, record_interval=args.record_interval)
+    try:
+        result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
+                              fmu_dir=args.fmu_dir, record_interval=args.record_interval)
+    except SonotrackError as exc:
+        if "not found at" in str(exc):
+            raise SonotrackError(f"{exc}\n  (build the FMUs first: `sonotrack build`, or "
+                                 "point --fmu-dir at them)") from exc
+        raise
     summary = result.summary
     for key in ("final_distance_to_source_m", "min_distance_to_source_m", "final_position_error_m",
                 "path_rmse_m", "sim_time_s", "wall_time_s", "realtime_factor", "steps"):

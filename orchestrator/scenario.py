@@ -104,13 +104,16 @@ _KIND_TEXT = {
 
 
 def default_system_path(base_dir=None):
-    """The default ``.ssd``: ``<base_dir>/../fmus/SystemStructure.ssd``.
+    """The default ``.ssd``: ``<base_dir>/../fmus/SystemStructure.ssd`` if it exists.
 
-    Without ``base_dir``, the repository's ``fmus/SystemStructure.ssd`` (this package's sibling).
+    Without ``base_dir``, or when a scenario lives outside a checkout (no ``../fmus`` beside
+    it), the repository's ``fmus/SystemStructure.ssd`` (this package's sibling).
     """
+    repository = Path(__file__).resolve().parent.parent / "fmus" / "SystemStructure.ssd"
     if base_dir is None:
-        return Path(__file__).resolve().parent.parent / "fmus" / "SystemStructure.ssd"
-    return (Path(base_dir) / ".." / "fmus" / "SystemStructure.ssd").resolve()
+        return repository
+    beside = (Path(base_dir) / ".." / "fmus" / "SystemStructure.ssd").resolve()
+    return beside if beside.is_file() else repository
 
 
 def _type_name(value):
