@@ -70,6 +70,9 @@ class SonotrackSlave(Fmi2Slave):
         self._units = {}
         self._dependencies = {}
         self._logged_once = set()
+        # value reference -> attribute name, per type: the hot get/set path (below) looks the
+        # attribute up directly instead of pythonfmu's per-call isinstance and getter lambdas.
+        self._names_by_type = {Real: {}, Integer: {}, Boolean: {}, String: {}}
 
     # ----- port declarations -------------------------------------------------------------
     def _declare(self, kind, name, causality, description, unit=None, depends_on=None):
@@ -89,6 +92,7 @@ class SonotrackSlave(Fmi2Slave):
         variable = kind(name, causality=causality, description=description,
                         variability=variability, initial=initial)
         self.register_variable(variable)
+        self._names_by_type[kind][variable.value_reference] = name
         if causality == Fmi2Causality.output:
             self._dependencies[name] = tuple(depends_on or ())
 
@@ -131,6 +135,36 @@ class SonotrackSlave(Fmi2Slave):
     def parameter_string(self, name, description):
         """Declare a fixed String parameter (a mode or a file name)."""
         self._declare(String, name, Fmi2Causality.parameter, description)
+
+    # ----- batched get/set without per-variable indirection ---------------------------------
+    def _names(self, kind, vrs):
+        names = self._names_by_type[kind]
+        try:
+            return [names[vr] for vr in vrs]
+        except KeyError as exc:
+            raise TypeError(f"variable with valueReference={exc.args[0]} is not of type "
+                            f"{kind.__name__}") from None
+
+    def get_real(self, vrs):
+        return [float(getattr(self, name)) for name in self._names(Real, vrs)]
+
+    def get_integer(self, vrs):
+        return [int(getattr(self, name)) for name in self._names(Integer, vrs)]
+
+    def get_boolean(self, vrs):
+        return [bool(getattr(self, name)) for name in self._names(Boolean, vrs)]
+
+    def set_real(self, vrs, values):
+        for name, value in zip(self._names(Real, vrs), values):
+            setattr(self, name, value)
+
+    def set_integer(self, vrs, values):
+        for name, value in zip(self._names(Integer, vrs), values):
+            setattr(self, name, value)
+
+    def set_boolean(self, vrs, values):
+        for name, value in zip(self._names(Boolean, vrs), values):
+            setattr(self, name, value)
 
     # ----- refusing bad input ----------------------------------------------------------------
     def refuse(self, port, value, reason):
