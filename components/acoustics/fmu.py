@@ -2,7 +2,7 @@
 
 from ..common.errors import InputError, SonotrackError
 from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
-from .localizer import FixStatus, LocalizerCore
+from .localizer import LocalizerCore
 from .settings import DEFAULTS
 
 __all__ = ["AcousticLocalizer"]
@@ -62,16 +62,7 @@ class AcousticLocalizer(SonotrackSlave):
         for name, _ in _STRING_PARAMETERS:
             setattr(self, name, str(DEFAULTS[name]))
         self.core = LocalizerCore()
-        self.distance = 0.0
-        self.bearing = 0.0
-        self.valid = False
-        self.tdoa_12 = 0.0
-        self.tdoa_23 = 0.0
-        self.measurement_id = 0
-        self.peak_quality = 0.0
-        self.fix_status = FixStatus.NOT_EMITTING
-        self.true_distance = 0.0
-        self.true_bearing = 0.0
+        self._copy_outputs()  # the core's "no fix yet" values
 
         self.input_real("source_x", "m", "true source position x (world frame)")
         self.input_real("source_y", "m", "true source position y (world frame)")
@@ -126,10 +117,14 @@ class AcousticLocalizer(SonotrackSlave):
         if core.missed_instants:
             self.log_once("missed", f"step_size {step_size!r} s exceeds fix_period "
                           f"{core.settings.fix_period!r} s: some fix instants are skipped")
+        self._copy_outputs()
+        return True
+
+    def _copy_outputs(self):
+        core = self.core
         self.distance, self.bearing, self.valid = core.distance, core.bearing, core.valid
         self.tdoa_12, self.tdoa_23 = core.tdoa_12, core.tdoa_23
         self.measurement_id = core.measurement_id
         self.peak_quality = core.peak_quality
         self.fix_status = core.fix_status
         self.true_distance, self.true_bearing = core.true_distance, core.true_bearing
-        return True
