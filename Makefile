@@ -30,7 +30,7 @@ test-unit: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not integration"
 
 benchmarks: fmus
-	for script in benchmarks/*.py; do $(BIN)/python $$script || exit 1; done
+	for script in benchmarks/[!_]*.py; do $(BIN)/python $$script || exit 1; done
 
 clean:
 	rm -rf $(VENV) $(FMU_DIR)/*.fmu $(FMU_DIR)/*.ssp runs .pytest_cache
