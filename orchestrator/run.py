@@ -166,9 +166,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     results_csv = out_dir / "results.csv"
     summary_json = out_dir / "summary.json"
     record_every = max(1, int(round(record_interval / scenario.base_step)))
-    steps_total = int(round((scenario.stop_time - scenario.start_time) / scenario.base_step)) \
-        if hasattr(scenario, "start_time") else int(round(scenario.stop_time / scenario.base_step))
-    start_time = getattr(scenario, "start_time", 0.0)
+    # scenarios start at t = 0 (the schema has no start time); time is t0 + k * base_step
+    start_time = 0.0
+    steps_total = scenario.step_count
 
     master.initialize(start_time=start_time, stop_time=scenario.stop_time)
     read_row = _ColumnReader(master, system, columns)
