@@ -6,11 +6,18 @@ its inputs are held. In Gauss-Seidel mode instances step in the order given (pro
 first), each reading the latest outputs of those already stepped in this macro step; in
 Jacobi mode every instance due at ``k`` reads the outputs as they were at ``t_k``.
 
-Value references are resolved once. Each step does one batched set and one batched get per
-type per instance (through preallocated ctypes arrays) and copies connected values with a
-precomputed list of ``(source array, index, destination array, index)``. Only outputs that
-feed a connection are read every step; others are read when someone asks for them
-(:meth:`Master.read_outputs`, e.g. the recorder at its own interval).
+Value references are resolved once. Each step does at most one batched set and one batched
+get per type per instance (through preallocated ctypes arrays) and copies connected values
+with a precomputed list of ``(source array, index, destination index)`` per input group. An
+input group is set only when a value in it changed since it was last set: FMI inputs keep
+their value until set again, so re-sending a held value is a wasted call (most steps, for
+inputs fed by a slower instance or by a sample-and-hold output).
+
+Outputs that feed a connection are read after every step of their instance. Outputs someone
+else watches (``observed``, e.g. the recorder's columns) ride along in those reads when they
+share an instance and type with a connected output (one more value in a get call costs next
+to nothing); :meth:`Master.observed_value` then returns them from the buffer without a call.
+Other outputs are read on request (:meth:`Master.read_outputs`).
 """
 
 import math
@@ -67,6 +74,8 @@ class _Slot:
         self.inputs = {t: handle.port_group(t, input_names[t]) for t in _TYPES}
         self.output_groups = [g for g in self.outputs.values() if len(g)]
         self.input_groups = [g for g in self.inputs.values() if len(g)]
+        # Filled by Master.initialize: (input group, [(source values, i, j), ...]) per group.
+        self.feeds = []
 
     def read_outputs(self):
         handle = self.spec.handle
@@ -87,9 +96,12 @@ class Master:
         The base step ``h`` in s.
     algorithm : {"gauss-seidel", "jacobi"}
         How inputs are taken within a macro step.
+    observed : iterable of str
+        Outputs (``"instance.port"``) read often by someone else (the recorder); those of a
+        type already read for a connection are read with it (see :meth:`observed_value`).
     """
 
-    def __init__(self, instances, links, base_step, algorithm="gauss-seidel"):
+    def __init__(self, instances, links, base_step, algorithm="gauss-seidel", observed=()):
         if algorithm not in MASTER_ALGORITHMS:
             raise ConfigError(f"master algorithm {algorithm!r} is not one of "
                               f"{', '.join(MASTER_ALGORITHMS)}")
@@ -99,8 +111,8 @@ class Master:
         self.links = list(links)
         self.base_step = float(base_step)
         self.algorithm = algorithm
+        self.observed = list(observed)
         self._slots = {}
-        self._copies = {}
         self._time = 0.0
         self.steps_done = 0
 
@@ -118,6 +130,12 @@ class Master:
             instance, port = link.destination.split(".", 1)
             variable = by_name[instance].handle.variables[port]
             inputs[instance][variable.type].append(port)
+        for name in self.observed:
+            instance, port = name.split(".", 1)
+            variable = by_name[instance].handle.variables[port]
+            group = outputs[instance][variable.type]
+            if group and port not in group:
+                group.append(port)
         self.start_time = float(start_time)
         for spec in self.instances:
             try:
@@ -129,30 +147,43 @@ class Master:
                 raise SimulationError(f"instance {spec.name} failed to initialise: "
                                       f"{said or exc}") from exc
             self._slots[spec.name] = _Slot(spec, outputs[spec.name], inputs[spec.name])
-        for spec in self.instances:
-            self._copies[spec.name] = []
+        feeds = {spec.name: {} for spec in self.instances}
         for link in self.links:
             source_instance, source_port = link.source.split(".", 1)
             target_instance, target_port = link.destination.split(".", 1)
-            source = self._slots[source_instance]
-            target = self._slots[target_instance]
             type_name = by_name[source_instance].handle.variables[source_port].type
-            source_group = source.outputs[type_name]
-            target_group = target.inputs[type_name]
-            self._copies[target_instance].append(
+            source_group = self._slots[source_instance].outputs[type_name]
+            target_group = self._slots[target_instance].inputs[type_name]
+            feeds[target_instance].setdefault(type_name, (target_group, []))[1].append(
                 (source_group.values, source_group.names.index(source_port),
-                 target_group.values, target_group.names.index(target_port)))
+                 target_group.names.index(target_port)))
         for slot in self._slots.values():
+            slot.feeds = list(feeds[slot.spec.name].values())
             slot.read_outputs()
-        self._plan = [(self._slots[s.name], s.rate, self._copies[s.name]) for s in self.instances]
+        # Every input group is set once before the first step, whatever its buffer holds.
+        for slot in self._slots.values():
+            self._send_inputs(slot, force=True)
+        self._plan = [(self._slots[s.name], s.rate) for s in self.instances]
 
     def outputs(self, instance):
-        """Buffers of the connected outputs of ``instance``: {type: PortGroup}."""
+        """Buffers of the outputs of ``instance`` read every step: {type: PortGroup}."""
         return self._slots[instance].outputs
 
     def output_group(self, instance, type_name, names):
         """Resolve any outputs of ``instance`` into a group for :meth:`read_outputs`."""
         return self._slots[instance].spec.handle.port_group(type_name, names)
+
+    def observed_value(self, name):
+        """Return ``(buffer, index)`` holding output ``name`` after every step, or None.
+
+        Only outputs read with a connection (see ``observed``) have one; the buffer is
+        refreshed after each step of the instance, so read it, do not keep the value.
+        """
+        instance, port = name.split(".", 1)
+        for group in self._slots[instance].output_groups:
+            if port in group.names:
+                return group.values, group.names.index(port)
+        return None
 
     def read_outputs(self, instance, group):
         """Read a group from :meth:`output_group` now (one batched get); return its values."""
@@ -168,32 +199,41 @@ class Master:
         t = self.start_time + k * self.base_step
         h = self.base_step
         if self.algorithm == "gauss-seidel":
-            for slot, rate, copies in self._plan:
+            for slot, rate in self._plan:
                 if k % rate:
                     continue
-                self._step_slot(slot, copies, t, rate * h)
+                self._send_inputs(slot)
+                self._do_step(slot, t, rate * h)
                 slot.read_outputs()
         else:
-            due = [(slot, rate, copies) for slot, rate, copies in self._plan if k % rate == 0]
-            for slot, rate, copies in due:
-                for source_values, i, target_values, j in copies:
-                    target_values[j] = source_values[i]
-                handle = slot.spec.handle
-                for group in slot.input_groups:
-                    handle.write(group)
-            for slot, rate, copies in due:
+            due = [(slot, rate) for slot, rate in self._plan if k % rate == 0]
+            for slot, rate in due:
+                self._send_inputs(slot)
+            for slot, rate in due:
                 self._do_step(slot, t, rate * h)
-            for slot, rate, copies in due:
+            for slot, rate in due:
                 slot.read_outputs()
         self.steps_done = k + 1
 
-    def _step_slot(self, slot, copies, t, step):
-        for source_values, i, target_values, j in copies:
-            target_values[j] = source_values[i]
+    @staticmethod
+    def _send_inputs(slot, force=False):
+        """Copy connected outputs into the slot's input buffers; set the groups that changed."""
         handle = slot.spec.handle
-        for group in slot.input_groups:
-            handle.write(group)
-        self._do_step(slot, t, step)
+        for group, pairs in slot.feeds:
+            values = group.values
+            changed = force
+            for source_values, i, j in pairs:
+                value = source_values[i]
+                if values[j] != value:  # NaN != NaN: a NaN is always sent (and refused)
+                    values[j] = value
+                    changed = True
+            if changed:
+                handle.write(group)
+
+    def resend_inputs(self):
+        """Set every input group now, changed or not (e.g. after restoring an FMU state)."""
+        for slot in self._slots.values():
+            self._send_inputs(slot, force=True)
 
     def _do_step(self, slot, t, step):
         try:

@@ -159,7 +159,8 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
                    for name in order}
     specs = [InstanceSpec(name, handles[name], rates[name], parameters[name]) for name in order]
     links = [Link(str(c.start), str(c.end)) for c in system.connections]
-    master = Master(specs, links, scenario.base_step, algorithm or scenario.master)
+    master = Master(specs, links, scenario.base_step, algorithm or scenario.master,
+                    observed=columns)
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -244,16 +245,25 @@ def _start_value(system, instance, name, default):
 
 
 class _ColumnReader:
-    """Reads the recorded columns with one batched get per type per instance."""
+    """Collects a row of the recorded columns.
+
+    Columns the master reads every step anyway (see ``Master(observed=...)``) are copied from
+    its buffers; the rest are read with one batched get per type per instance.
+    """
 
     def __init__(self, master, system, columns):
         by_instance = {}
-        for column in columns:
+        self._buffered = []
+        for slot, column in enumerate(columns):
             instance, port = column.split(".", 1)
             variable = system.variable(column)
             if variable.causality != "output":
                 raise ConfigError(f"outputs: {column} is a {variable.causality}, not an output")
-            by_instance.setdefault(instance, {}).setdefault(variable.type, []).append(port)
+            buffered = master.observed_value(column)
+            if buffered is not None:
+                self._buffered.append((slot,) + buffered)
+            else:
+                by_instance.setdefault(instance, {}).setdefault(variable.type, []).append(port)
         self._groups = []
         position = {column: i for i, column in enumerate(columns)}
         for instance, by_type in by_instance.items():
@@ -266,6 +276,8 @@ class _ColumnReader:
 
     def __call__(self):
         row = self._row
+        for slot, values, index in self._buffered:
+            row[slot] = values[index]
         for instance, group, slots in self._groups:
             values = self._master.read_outputs(instance, group)
             for slot, value in zip(slots, values):
