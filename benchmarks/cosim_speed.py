@@ -6,8 +6,14 @@ Measured side by side in one run (alternating repetitions, medians reported):
 * ``us_per_instance_step``: our master stepping one FMU alone against fmpy's own
   ``simulate_fmu`` on the same FMU, step and stop time (RobotPlant and WheelController);
 * libcosim: ``CosimExecution.from_ssp_file`` on fmus/SystemStructure.ssd at a single rate
-  against our master (Jacobi) on the same single-rate system; also the largest difference of
-  the robot trajectories (the cross-check of tests/integration/test_cosim.py);
+  against our master (Jacobi) on the same single-rate system, recording the same things:
+  every output after every step (libcosim's last-value observer, which reads every variable,
+  against our recorder writing every output to results.csv), and only the robot trajectory
+  (libcosim's time-series observer on plant.x, plant.y against our recorder with those
+  columns); also the largest difference of the robot trajectories (the cross-check of
+  tests/integration/test_cosim.py). The models' own compute time on that system (the slaves'
+  ``do_step`` calls, timed in-process) splits each master's stepping time into model time
+  and master overhead per instance step;
 * in-process: the same slave classes composed without FMI (``backend="in-process"``).
 
 Writes benchmarks/results/cosim_speed.json.
@@ -89,28 +95,59 @@ def single_rate_ssd(fmu_dir):
     return path
 
 
-def libcosim_run(ssd, step, stop):
+def libcosim_run(ssd, step, stop, observer):
     from orchestrator.crosscheck import run_libcosim_ssd
 
-    timing, rows = run_libcosim_ssd(ssd, step, stop, ["plant.x", "plant.y"])
+    timing, rows = run_libcosim_ssd(ssd, step, stop, ["plant.x", "plant.y"], observer=observer)
     return timing, np.array(rows)
 
 
-def ours_single_rate(fmu_dir, step, stop, out):
-    from orchestrator.run import run_scenario
+def _single_rate_scenario(step, stop, outputs):
     from orchestrator.scenario import scenario_from_dict
 
-    scenario = scenario_from_dict({
+    return scenario_from_dict({
         "name": "single_rate", "system": str(SSD), "stop_time": stop, "base_step": step,
-        "steps": {name: step for name in INSTANCES}, "seed": 1, "master": "jacobi"})
+        "steps": {name: step for name in INSTANCES}, "seed": 1, "master": "jacobi",
+        "outputs": list(outputs)})
+
+
+def ours_single_rate(fmu_dir, step, stop, out, outputs):
+    from orchestrator.run import run_scenario
+
     started = time.perf_counter()
-    result = run_scenario(scenario, out, progress=False, fmu_dir=fmu_dir, plots=False,
-                          record_interval=step)
+    result = run_scenario(_single_rate_scenario(step, stop, outputs), out, progress=False,
+                          fmu_dir=fmu_dir, plots=False, record_interval=step)
     wall = time.perf_counter() - started
     with open(result.results_csv) as f:
         rows = list(csv.DictReader(f))[1:]
     timing = {"wall_s": wall, "stepping_s": result.summary["wall_time_s"]}
     return timing, np.array([[float(r["plant.x"]), float(r["plant.y"])] for r in rows])
+
+
+def model_compute_s(fmu_dir, step, stop, out):
+    """Seconds the slaves spend in ``do_step`` on the single-rate system, timed in-process."""
+    from orchestrator import inprocess
+    from orchestrator.run import run_scenario
+
+    spent = {}
+
+    class TimedSlave(inprocess.SlaveInstance):
+        def do_step(self, time_, step_):
+            started = time.perf_counter()
+            try:
+                super().do_step(time_, step_)
+            finally:
+                spent[self.name] = spent.get(self.name, 0.0) + time.perf_counter() - started
+
+    original = inprocess.SlaveInstance
+    inprocess.SlaveInstance = TimedSlave  # run_scenario looks the class up at call time
+    try:
+        run_scenario(_single_rate_scenario(step, stop, ["plant.x", "plant.y"]), out,
+                     progress=False, fmu_dir=fmu_dir, plots=False, record_interval=step,
+                     backend="in-process")
+    finally:
+        inprocess.SlaveInstance = original
+    return sum(spent.values()), spent
 
 
 def main(argv=None):
@@ -154,18 +191,56 @@ def main(argv=None):
 
     ssd = single_rate_ssd(fmu_dir)
     step, stop = 0.01, args.single_rate_stop
-    libcosim_walls, ours_walls, libcosim_steps, ours_steps = [], [], [], []
-    difference = None
+    single_steps = len(INSTANCES) * int(round(stop / step))
+    recordings = {
+        # name: (libcosim observer, our recorded outputs; [] is every output)
+        "every_output": ("last_value", []),
+        "trajectory": ("time_series", ["plant.x", "plant.y"]),
+    }
+    timings = {name: {"libcosim": [], "ours": []} for name in recordings}
+    models, model_split = [], []
+    difference = 0.0
     for r in range(args.repeats):
-        timing, theirs = libcosim_run(ssd, step, stop)
-        libcosim_walls.append(timing["wall_s"])
-        libcosim_steps.append(timing["stepping_s"])
-        timing, ours = ours_single_rate(fmu_dir, step, stop, work / f"single{r}")
-        ours_walls.append(timing["wall_s"])
-        ours_steps.append(timing["stepping_s"])
-        difference = float(np.max(np.hypot(*(ours - theirs).T)))
-        print(f"single rate {stop:g} s: libcosim {libcosim_walls[-1]:.2f} s, ours "
-              f"{ours_walls[-1]:.2f} s, max trajectory difference {difference:.3g} m", flush=True)
+        for name, (observer, outputs) in recordings.items():
+            timing, theirs = libcosim_run(ssd, step, stop, observer)
+            timings[name]["libcosim"].append(timing)
+            timing, ours = ours_single_rate(fmu_dir, step, stop, work / f"{name}{r}", outputs)
+            timings[name]["ours"].append(timing)
+            difference = max(difference, float(np.max(np.hypot(*(ours - theirs).T))))
+            print(f"single rate {stop:g} s, {name}: libcosim "
+                  f"{timings[name]['libcosim'][-1]['wall_s']:.2f} s, ours "
+                  f"{timings[name]['ours'][-1]['wall_s']:.2f} s, max trajectory difference "
+                  f"{difference:.3g} m", flush=True)
+        total, split = model_compute_s(fmu_dir, step, stop, work / f"model{r}")
+        models.append(total)
+        model_split.append(split)
+    model = median(models)
+
+    def summarise(name):
+        lib = timings[name]["libcosim"]
+        ours = timings[name]["ours"]
+        lib_wall, ours_wall = median([t["wall_s"] for t in lib]), median([t["wall_s"] for t in ours])
+        lib_step = median([t["stepping_s"] for t in lib])
+        ours_step = median([t["stepping_s"] for t in ours])
+        lib_overhead = (lib_step - model) / single_steps
+        ours_overhead = (ours_step - model) / single_steps
+        return {
+            "libcosim_observer": recordings[name][0],
+            "ours_recorded_outputs": recordings[name][1] or "every output",
+            "libcosim_wall_s": lib_wall, "ours_wall_s": ours_wall,
+            "speedup_ours_over_libcosim": lib_wall / ours_wall,
+            "libcosim_stepping_s": lib_step, "ours_stepping_s": ours_step,
+            "stepping_speedup_ours_over_libcosim": lib_step / ours_step,
+            "libcosim_overhead_us_per_instance_step": lib_overhead * 1e6,
+            "ours_overhead_us_per_instance_step": ours_overhead * 1e6,
+            # The stepping speed-up if the models cost nothing: the masters' overheads alone.
+            "stepping_speedup_bound_without_model_time": lib_overhead / ours_overhead
+            if ours_overhead > 0 else None,
+            # The model time (per simulated 10 s) below which 3x would be reached with these
+            # overheads: (M + Olib) / (M + Ours) >= 3  <=>  M <= (Olib - 3 Ours) / 2.
+            "model_time_for_3x_s": max(0.0, (lib_overhead - 3.0 * ours_overhead)
+                                       * single_steps / 2.0),
+        }
 
     record = {
         "scenario": "scenarios/s_curve.toml",
@@ -181,25 +256,33 @@ def main(argv=None):
         "fmi_over_in_process_wall_ratio": median(fmi_wall) / median(inprocess_wall),
         "fmi_over_in_process_target": 3.0,
         "libcosim_single_rate": {
-            "step_s": step, "stop_time_s": stop,
-            "libcosim_wall_s": median(libcosim_walls), "ours_wall_s": median(ours_walls),
-            "speedup_ours_over_libcosim": median(libcosim_walls) / median(ours_walls),
-            "libcosim_stepping_s": median(libcosim_steps), "ours_stepping_s": median(ours_steps),
-            "stepping_speedup_ours_over_libcosim": median(libcosim_steps) / median(ours_steps),
+            "step_s": step, "stop_time_s": stop, "instance_steps": single_steps,
             "speedup_target": 3.0,
+            "model_compute_s": model,
+            "model_compute_by_instance_s": {name: median([s[name] for s in model_split])
+                                            for name in model_split[0]},
+            "every_output": summarise("every_output"),
+            "trajectory": summarise("trajectory"),
             "max_trajectory_difference_m": difference,
             "difference_target_m": 1e-6,
             "note": "wall: both include loading the system and instantiating the FMUs (ours "
                     "also writes results.csv and summary.json); stepping: the step loop only. "
-                    "libcosim runs in a child process and is timed inside it",
+                    "libcosim runs in a child process and is timed inside it. model_compute_s: "
+                    "the slaves' do_step time on the same system run in-process (no FMI); "
+                    "overhead = (stepping - model_compute) / instance_steps",
         },
     }
     out = write_result("cosim_speed", record)
     single_rate = record["libcosim_single_rate"]
     print(f"realtime factor {record['realtime_factor']:.1f} (target 20); FMI/in-process "
-          f"{record['fmi_over_in_process_wall_ratio']:.2f} (target <= 3); ours vs libcosim "
-          f"{single_rate['speedup_ours_over_libcosim']:.1f}x wall, "
-          f"{single_rate['stepping_speedup_ours_over_libcosim']:.1f}x stepping (target >= 3)")
+          f"{record['fmi_over_in_process_wall_ratio']:.2f} (target <= 3)")
+    for name in ("every_output", "trajectory"):
+        row = single_rate[name]
+        print(f"ours vs libcosim, {name}: {row['speedup_ours_over_libcosim']:.2f}x wall, "
+              f"{row['stepping_speedup_ours_over_libcosim']:.2f}x stepping (target >= 3); "
+              f"overhead per instance step {row['ours_overhead_us_per_instance_step']:.0f} us "
+              f"vs {row['libcosim_overhead_us_per_instance_step']:.0f} us; model time "
+              f"{single_rate['model_compute_s']:.3f} s")
     print(f"wrote {out}")
     return 0
 

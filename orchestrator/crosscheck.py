@@ -11,12 +11,13 @@ import sys
 import textwrap
 from pathlib import Path
 
-from components.common.errors import SimulationError
+from components.common.errors import ConfigError, SimulationError
 
-__all__ = ["run_libcosim_ssd"]
+__all__ = ["OBSERVERS", "run_libcosim_ssd"]
 
 _CHILD = textwrap.dedent('''
     import json, sys, time
+    from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
@@ -25,25 +26,43 @@ _CHILD = textwrap.dedent('''
     log_output_level(CosimLogLevel.ERROR)
     started = time.perf_counter()
     execution = CosimExecution.from_ssp_file(job["ssd"], step_size=int(round(job["step"] * 1e9)))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
     reads = []
     for column in job["columns"]:
         instance, port = column.split(".", 1)
         index = execution.slave_index_from_instance_name(instance)
         references = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
         reads.append((index, references[port]))
+    if job["observer"] == "last_value":
+        observer = CosimObserver.create_last_value()
+        execution.add_observer(observer)
+    else:
+        observer = CosimObserver.create_time_series(job["steps"] + 1)
+        execution.add_observer(observer)  # series started before this are silently ignored
+        for index, reference in reads:
+            observer.start_time_series(index, reference, CosimVariableType.REAL)
     rows = []
     stepping = time.perf_counter()
-    for _ in range(job["steps"]):
-        execution.step(1)
-        rows.append([observer.last_real_values(i, [r])[0] for i, r in reads])
+    if job["observer"] == "last_value":
+        for _ in range(job["steps"]):
+            execution.step(1)
+            rows.append([observer.last_real_values(i, [r])[0] for i, r in reads])
+    else:
+        execution.step(job["steps"])
     end = time.perf_counter()
+    if job["observer"] != "last_value":
+        series = []
+        for index, reference in reads:
+            _, steps, values = observer.time_series_real_samples(index, reference, 1,
+                                                                 job["steps"])
+            series.append(list(values))
+        rows = [list(row) for row in zip(*series)]
     print(json.dumps({"wall_s": end - started, "stepping_s": end - stepping, "rows": rows}))
 ''')
 
+OBSERVERS = ("last_value", "time_series")
 
-def run_libcosim_ssd(ssd_path, step, stop_time, columns):
+
+def run_libcosim_ssd(ssd_path, step, stop_time, columns, observer="last_value"):
     """Run ``ssd_path`` in libcosim at a fixed ``step`` and record Real outputs.
 
     Parameters
@@ -53,7 +72,11 @@ def run_libcosim_ssd(ssd_path, step, stop_time, columns):
     step, stop_time : float
         Base step and end time in s.
     columns : list of str
-        ``"instance.port"`` Real outputs to read after every step.
+        ``"instance.port"`` Real outputs to record after every step.
+    observer : {"last_value", "time_series"}
+        ``last_value``: libcosim reads every variable of every instance after each step and
+        the columns are taken from it step by step; ``time_series``: libcosim observes only
+        the columns and runs all steps in one call (its leanest way to record them).
 
     Returns
     -------
@@ -62,8 +85,10 @@ def run_libcosim_ssd(ssd_path, step, stop_time, columns):
     rows : list of list of float
         One row per step, the columns in order.
     """
+    if observer not in OBSERVERS:
+        raise ConfigError(f"libcosim observer {observer!r} is not one of {', '.join(OBSERVERS)}")
     job = {"ssd": str(Path(ssd_path)), "step": step, "columns": list(columns),
-           "steps": int(round(stop_time / step))}
+           "steps": int(round(stop_time / step)), "observer": observer}
     completed = subprocess.run([sys.executable, "-c", _CHILD], input=json.dumps(job),
                                capture_output=True, text=True)
     if completed.returncode != 0:
