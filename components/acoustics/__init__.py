@@ -10,7 +10,8 @@ from .estimators import (ESTIMATORS, ExactNearField, FarField, Location, PaperEq
                          PositionEstimator, far_field_pair_bearings, make_estimator,
                          register_estimator)
 from .gcc import WEIGHTINGS, DelayEstimate, estimate_delays, estimate_pair_delays
-from .geometry import exact_tdoas, microphone_positions, robot_polar, source_in_array_frame
+from .geometry import (exact_tdoas, microphone_positions, microphone_ranges, robot_polar,
+                       source_in_array_frame)
 from .localizer import BurstFixes, FixStatus, LocalizerCore, judge, locate_bursts, locate_records
 from .onset import detect_onsets
 from .settings import DEFAULTS, LocalizerSettings
@@ -23,8 +24,8 @@ __all__ = [
     "tdoa_covariance_bound", "ESTIMATORS", "ExactNearField", "FarField", "Location", "PaperEq4",
     "PositionEstimator", "far_field_pair_bearings", "make_estimator", "register_estimator",
     "WEIGHTINGS", "DelayEstimate", "estimate_delays", "estimate_pair_delays", "exact_tdoas",
-    "microphone_positions", "robot_polar", "source_in_array_frame", "BurstFixes", "FixStatus",
-    "LocalizerCore", "judge",
+    "microphone_positions", "microphone_ranges", "robot_polar", "source_in_array_frame",
+    "BurstFixes", "FixStatus", "LocalizerCore", "judge",
     "locate_bursts", "locate_records", "detect_onsets", "DEFAULTS",
     "LocalizerSettings", "REFERENCE_AMPLITUDE", "REFERENCE_DISTANCE", "noise_std",
     "quantisation_step", "record_length", "synthesise_records", "TdoaMeasurement",

@@ -13,6 +13,8 @@ Each estimator validates the delays (finite, physically possible), then computes
     Exact range, far-field bearing (Eq. 5): the mean of the two adjacent-pair angles.
 """
 
+import math
+
 import numpy as np
 
 from ..common.errors import InputError, ParameterError
@@ -88,9 +90,43 @@ class PositionEstimator:
         return Location(np.where(consistent, distance, np.nan),
                         np.where(consistent, bearing, np.nan), consistent)
 
+    def locate_one(self, tdoa_12, tdoa_23):
+        """:meth:`locate` for one pair of float delays, as Python scalars.
+
+        Returns
+        -------
+        tuple
+            ``(distance, bearing, consistent)``: floats (NaN where inconsistent) and a bool.
+
+        Raises
+        ------
+        InputError
+            A delay is NaN or infinite.
+        """
+        for port, value in (("tdoa_12", tdoa_12), ("tdoa_23", tdoa_23)):
+            if not math.isfinite(value):
+                raise InputError(f"{self.name} estimator: {port} = {float(value)!r} s is not finite")
+        a = self.speed_of_sound * tdoa_12
+        b = self.speed_of_sound * tdoa_23
+        if abs(a) < self.mic_spacing and abs(b) < self.mic_spacing:
+            distance, bearing, consistent = self._compute_one(a, b)
+            if consistent and math.isfinite(distance) and math.isfinite(bearing):
+                return distance, bearing, True
+        return math.nan, math.nan, False
+
     def _compute(self, a, b):
         """Return ``(distance, bearing, consistent)`` from range differences ``a``, ``b`` [m]."""
         raise NotImplementedError
+
+    def _compute_one(self, a, b):
+        """:meth:`_compute` for float ``a``, ``b``; returns floats and a bool.
+
+        Subclasses override it with the same arithmetic in Python scalars (a fix's numpy
+        calls on 0-d arrays cost more than the work); this default calls :meth:`_compute`.
+        """
+        with np.errstate(divide="ignore", invalid="ignore"):
+            distance, bearing, consistent = self._compute(np.float64(a), np.float64(b))
+        return float(distance), float(bearing), bool(consistent)
 
 
 def _unit_clamp(x):
@@ -113,6 +149,14 @@ def far_field_pair_bearings(a, b, spacing):
     return theta_1 - 0.5 * np.pi, 0.5 * np.pi - theta_2
 
 
+def _far_field_bearing_one(a, b, spacing):
+    """The mean of :func:`far_field_pair_bearings` for float ``a``, ``b``."""
+    # np.arccos, not math.acos: the libraries' results differ in the last bit.
+    theta_1 = float(np.arccos(min(max(a / spacing, -1.0), 1.0)))
+    theta_2 = float(np.arccos(min(max(b / spacing, -1.0), 1.0)))
+    return 0.5 * ((theta_1 - 0.5 * np.pi) + (0.5 * np.pi - theta_2))
+
+
 class ExactNearField(PositionEstimator):
     """Exact near-field range and bearing (the default)."""
 
@@ -124,6 +168,18 @@ class ExactNearField(PositionEstimator):
         sine = (b - a) * (2.0 * distance + a + b) / (4.0 * spacing * distance)
         consistent = (a + b > 0.0) & (distance > 0.0) & (np.abs(sine) <= 1.0)
         return distance, np.arcsin(_unit_clamp(sine)), consistent
+
+    def _compute_one(self, a, b):
+        spacing = self.mic_spacing
+        # Short-circuits where _compute divides by zero: those are inconsistent anyway.
+        if not a + b > 0.0:
+            return math.nan, math.nan, False
+        distance = _exact_range(a, b, spacing)
+        if not distance > 0.0:
+            return distance, math.nan, False
+        sine = (b - a) * (2.0 * distance + a + b) / (4.0 * spacing * distance)
+        # np.arcsin, not math.asin: the libraries' results differ in the last bit.
+        return distance, float(np.arcsin(min(max(sine, -1.0), 1.0))), abs(sine) <= 1.0
 
 
 class PaperEq4(PositionEstimator):
@@ -139,6 +195,13 @@ class PaperEq4(PositionEstimator):
         consistent = (a + b > 0.0) & (distance > 0.0)
         return distance, 0.5 * (left + right), consistent
 
+    def _compute_one(self, a, b):
+        if not a + b > 0.0:
+            return math.nan, math.nan, False
+        spacing = self.mic_spacing
+        distance = (spacing**2 + spacing * (a + b) - (a * a + a * b + b * b)) / (2.0 * (a + b))
+        return distance, _far_field_bearing_one(a, b, spacing), distance > 0.0
+
 
 class FarField(PositionEstimator):
     """Exact range with the far-field bearing of Eq. (5) (comparison only)."""
@@ -149,6 +212,12 @@ class FarField(PositionEstimator):
         distance = _exact_range(a, b, self.mic_spacing)
         left, right = far_field_pair_bearings(a, b, self.mic_spacing)
         return distance, 0.5 * (left + right), (a + b > 0.0) & (distance > 0.0)
+
+    def _compute_one(self, a, b):
+        if not a + b > 0.0:
+            return math.nan, math.nan, False
+        distance = _exact_range(a, b, self.mic_spacing)
+        return distance, _far_field_bearing_one(a, b, self.mic_spacing), distance > 0.0
 
 
 ESTIMATORS = {}

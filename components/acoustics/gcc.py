@@ -7,6 +7,7 @@ band-limited correlation written as a Fourier series over the weighted bins, whi
 """
 
 import functools
+import math
 
 import numpy as np
 
@@ -22,6 +23,7 @@ WEIGHTINGS = ("band", "phat")
 _PHAT_EPSILON = 1e-3
 _NEWTON_STEPS = 3
 _NEIGHBOURS = np.array([-1, 0, 1])
+_TINY = float(np.finfo(float).tiny)
 
 
 class DelayEstimate:
@@ -80,6 +82,23 @@ def _grid(n, sample_rate, low, high, max_lag):
     return _Grid(n, sample_rate, low, high, max_lag)
 
 
+def _integer_lag_correlation(whitened, grid):
+    """Correlation at the integer lags, ``r(k) = sum_f Re(W G e^{+j 2 pi f k / fs})``, shape (..., lags).
+
+    One inverse FFT of the unfolded spectrum (the inverse real FFT folds the one-sided
+    spectrum itself). ``norm="forward"`` leaves the inverse unscaled, which is the sum
+    itself: the same numbers as scaling by ``1 / n_fft`` and back (a power of two, exact),
+    without the scaling pass, which costs as much as a third of the transform here.
+    """
+    if grid.band.start == 0 < grid.band.stop:
+        # The inverse pads the missing top bins with zeros itself.
+        spectrum = whitened
+    else:
+        spectrum = np.zeros(whitened.shape[:-1] + (grid.n_freqs,), dtype=complex)
+        spectrum[..., grid.band] = whitened
+    return np.fft.irfft(spectrum, grid.n_fft, axis=-1, norm="forward")[..., grid.lag_index]
+
+
 def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
     """Estimate the delay of ``u`` relative to ``v`` along the last axis.
 
@@ -131,7 +150,7 @@ def estimate_pair_delays(pairs, sample_rate, passband, max_lag, weighting="band"
     spectra = np.fft.rfft(pairs, grid.n_fft, axis=-1)[..., grid.band]
     spectrum_u, spectrum_v = spectra[..., 0, :], spectra[..., 1, :]
     cross = spectrum_u * np.conj(spectrum_v)
-    tiny = np.finfo(float).tiny
+    tiny = _TINY
     if weighting == "phat":
         magnitude = np.abs(cross)
         floor = _PHAT_EPSILON * magnitude.max(axis=-1, keepdims=True)
@@ -145,11 +164,7 @@ def estimate_pair_delays(pairs, sample_rate, passband, max_lag, weighting="band"
     norm = np.maximum(norm, tiny)
 
     lags = grid.lags
-    # Correlation at integer lags, r(k) = sum_f Re(W G e^{+j 2 pi f k / fs}), by one inverse
-    # FFT of the unfolded spectrum (the inverse real FFT folds the one-sided spectrum itself).
-    full = np.zeros(cross.shape[:-1] + (grid.n_freqs,), dtype=complex)
-    full[..., grid.band] = whitened
-    correlation = np.fft.irfft(full, grid.n_fft, axis=-1)[..., grid.lag_index] * grid.n_fft
+    correlation = _integer_lag_correlation(whitened, grid)
     peak = correlation.argmax(axis=-1)
     # Parabola through the peak and its neighbours (clamped at the bound) as Newton's start.
     inner = np.minimum(np.maximum(peak, 1), lags.size - 2)
@@ -173,3 +188,66 @@ def estimate_pair_delays(pairs, sample_rate, passband, max_lag, weighting="band"
     lag = np.minimum(np.maximum(lag, -grid.max_samples), grid.max_samples)
     height = (weighted * np.exp(grid.j_omega * lag[..., None])).real.sum(axis=-1)
     return DelayEstimate(lag / sample_rate, height / norm, at_bound)
+
+
+def _estimate_pair_delays_one(pairs, sample_rate, passband, max_lag, weighting):
+    """:func:`estimate_pair_delays` for a few pairs (shape (p, 2, n)), as Python scalars.
+
+    The same numbers by the same operations; only the per-pair scalar steps (the parabola,
+    the Newton updates, the clamps) run in Python, where a fix's two pairs cost less than
+    numpy's per-call overhead.
+
+    Returns
+    -------
+    delays, qualities : list of float
+        Per pair, as :attr:`DelayEstimate.delay` and :attr:`DelayEstimate.quality`.
+    at_bound : bool
+        Some pair's integer peak sits on the lag bound.
+    """
+    if weighting not in WEIGHTINGS:
+        raise ParameterError(f"weighting = {weighting!r}; valid choices: {', '.join(WEIGHTINGS)}")
+    grid = _grid(pairs.shape[-1], float(sample_rate), float(passband[0]), float(passband[1]),
+                 float(max_lag))
+    spectra = np.fft.rfft(pairs, grid.n_fft, axis=-1)[..., grid.band]
+    cross = spectra[:, 0] * np.conj(spectra[:, 1])
+    if weighting == "phat":
+        magnitude = np.abs(cross)
+        floor = _PHAT_EPSILON * magnitude.max(axis=-1, keepdims=True)
+        whitened = cross / np.maximum(magnitude, np.maximum(floor, _TINY))
+        norms = [max(grid.fold_total, _TINY)] * len(cross)
+    else:
+        whitened = cross
+        energy = (np.abs(spectra) ** 2 @ grid.fold).tolist()
+        norms = [max(math.sqrt(energy_u * energy_v), _TINY) for energy_u, energy_v in energy]
+    weighted = grid.fold * whitened
+
+    correlation = _integer_lag_correlation(whitened, grid)
+    limit, last = int(grid.lags[-1]), grid.lags.size - 2
+    lags, bounds = [], []
+    at_bound = False
+    for row, peak in zip(correlation, correlation.argmax(axis=-1).tolist()):
+        # Parabola through the peak and its neighbours (clamped at the bound) as Newton's start.
+        inner = min(max(peak, 1), last)
+        left, centre, right = row[inner - 1:inner + 2].tolist()
+        curvature = left - 2.0 * centre + right
+        offset = 0.5 * (left - right) / curvature if curvature < 0.0 else 0.0
+        peak_lag = peak - limit
+        if inner != peak:
+            at_bound = True
+            lags.append(peak_lag + 0.0)
+        else:
+            lags.append(peak_lag + min(max(offset, -0.5), 0.5))
+        bounds.append((peak_lag - 1.0, peak_lag + 1.0))
+    for _ in range(_NEWTON_STEPS):
+        rotated = np.exp(grid.j_omega * np.array(lags)[:, None])
+        np.multiply(weighted, rotated, out=rotated)
+        derivatives = (rotated.view(float) @ grid.slope_and_curvature).tolist()
+        for pair, ((slope, curving), (lowest, highest)) in enumerate(zip(derivatives, bounds)):
+            step = slope / curving if curving > 0.0 else 0.0
+            lags[pair] = min(max(lags[pair] + min(max(step, -0.5), 0.5), lowest), highest)
+    lags = [min(max(lag, -grid.max_samples), grid.max_samples) for lag in lags]
+    rotated = np.exp(grid.j_omega * np.array(lags)[:, None])
+    np.multiply(weighted, rotated, out=rotated)
+    heights = rotated.real.sum(axis=-1).tolist()
+    return ([lag / sample_rate for lag in lags],
+            [height / norm for height, norm in zip(heights, norms)], at_bound)

@@ -5,9 +5,12 @@ the array centre is ``array_offset`` ahead of the robot's reference point along 
 Bearings are counter-clockwise (left) positive, relative to the heading.
 """
 
+import math
+
 import numpy as np
 
-__all__ = ["microphone_positions", "source_in_array_frame", "exact_tdoas", "robot_polar"]
+__all__ = ["microphone_positions", "microphone_ranges", "source_in_array_frame", "exact_tdoas",
+           "robot_polar"]
 
 
 def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_offset=0.0):
@@ -33,6 +36,28 @@ def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_off
     left = np.array([-forward[1], forward[0]])
     centre = np.array([robot_x, robot_y]) + array_offset * forward
     return np.stack([centre + mic_spacing * left, centre, centre - mic_spacing * left])
+
+
+def microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading, mic_spacing,
+                      array_offset=0.0):
+    """Return the ranges from a source to M1, M2, M3 (floats; one geometry).
+
+    The numbers of ``np.hypot`` from the source to :func:`microphone_positions`, by the same
+    arithmetic in Python scalars.
+
+    Returns
+    -------
+    list of float
+        ``[R1, R2, R3]`` [m].
+    """
+    # math.cos and math.sin give np.cos's and np.sin's bits; np.hypot and math.hypot differ.
+    cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
+    centre_x = robot_x + array_offset * cos_h
+    centre_y = robot_y + array_offset * sin_h
+    left_x, left_y = mic_spacing * -sin_h, mic_spacing * cos_h
+    dx = [source_x - (centre_x + left_x), source_x - centre_x, source_x - (centre_x - left_x)]
+    dy = [source_y - (centre_y + left_y), source_y - centre_y, source_y - (centre_y - left_y)]
+    return np.hypot(dx, dy).tolist()
 
 
 def source_in_array_frame(source_x, source_y, robot_x, robot_y, robot_heading, array_offset=0.0):

@@ -11,10 +11,10 @@ import numpy as np
 
 from ..common.errors import InputError
 from .estimators import make_estimator
-from .geometry import microphone_positions, robot_polar, source_in_array_frame
+from .geometry import microphone_ranges, robot_polar, source_in_array_frame
 from .settings import LocalizerSettings
-from .synthesis import synthesise_records
-from .tdoa import measure_tdoas
+from .synthesis import _synthesise_one, synthesise_records
+from .tdoa import _measure_tdoas_one, measure_tdoas
 
 __all__ = ["FixStatus", "BurstFixes", "judge", "locate_bursts", "locate_records", "LocalizerCore"]
 
@@ -116,6 +116,38 @@ def locate_records(settings, estimator, records):
                       location.bearing, measurement.quality.min(axis=-1), status)
 
 
+def _locate_one(settings, estimator, ranges, rng):
+    """:func:`locate_bursts` for one geometry (three float ranges), as Python scalars.
+
+    The same draws and numbers as :func:`locate_bursts` on shape (3,); a fix's arrays are
+    so small that numpy's per-call overhead, not the work, sets the cost, so the scalar
+    steps run in Python.
+    """
+    records = _synthesise_one(
+        settings.burst, ranges, sample_rate=settings.sample_rate,
+        speed_of_sound=settings.speed_of_sound, noise_std=settings.noise_std,
+        adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
+        n_samples=settings.record_samples, rng=rng)
+    measurement = _measure_tdoas_one(records, settings)
+    distance, bearing, consistent = estimator.locate_one(measurement.tdoa_12,
+                                                         measurement.tdoa_23)
+    quality = min(measurement.quality)
+    # judge(), the most fundamental failure first.
+    if not measurement.detected:
+        status = FixStatus.NO_ONSET
+    elif quality < settings.min_peak_quality:
+        status = FixStatus.WEAK_PEAK
+    elif measurement.at_bound:
+        status = FixStatus.LAG_AT_BOUND
+    elif not consistent:
+        status = FixStatus.INCONSISTENT
+    elif distance > settings.max_range:
+        status = FixStatus.ESTIMATE_OUT_OF_RANGE
+    else:
+        status = FixStatus.OK
+    return BurstFixes(measurement.tdoa_12, measurement.tdoa_23, distance, bearing, quality,
+                      status)
+
 
 class LocalizerCore:
     """Sample-and-hold localizer: one fix per ``fix_period`` while the source emits.
@@ -201,18 +233,16 @@ class LocalizerCore:
         elif range_2 > s.max_range:
             status = FixStatus.OUT_OF_RANGE
         else:
-            mics = microphone_positions(robot_x, robot_y, robot_heading, s.mic_spacing,
-                                        s.array_offset)
-            ranges = np.hypot(source_x - mics[:, 0], source_y - mics[:, 1])
-            # One burst, unbatched: the measurement slices its windows instead of indexing.
-            fixes = locate_bursts(s, self.estimator, ranges, self.rng)
-            status = int(fixes.status)
-            self.peak_quality = float(fixes.quality)
+            ranges = microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading,
+                                       s.mic_spacing, s.array_offset)
+            fixes = _locate_one(s, self.estimator, ranges, self.rng)
+            status = fixes.status
+            self.peak_quality = fixes.quality
             if status == FixStatus.OK:
                 distance, bearing = robot_polar(fixes.distance, fixes.bearing, s.array_offset)
                 self.distance, self.bearing = float(distance), float(bearing)
-                self.tdoa_12 = float(fixes.tdoa_12)
-                self.tdoa_23 = float(fixes.tdoa_23)
+                self.tdoa_12 = fixes.tdoa_12
+                self.tdoa_23 = fixes.tdoa_23
                 self.measurement_id += 1
         self.fix_status = int(status)
         self.valid = status == FixStatus.OK

@@ -13,6 +13,8 @@ import numpy as np
 
 __all__ = ["detect_onsets"]
 
+_TINY = float(np.finfo(float).tiny)
+
 
 def detect_onsets(records, template, threshold_db):
     """Return where each record's burst starts and whether it stands out of the noise.
@@ -33,15 +35,55 @@ def detect_onsets(records, template, threshold_db):
     detected : numpy.ndarray of bool
         Shape (...,): the peak exceeds the threshold.
     """
+    envelope = _envelope(records, template)
+    peak = envelope.argmax(axis=-1)
+    floor = np.maximum(_median(envelope), _TINY)
+    return peak, envelope.max(axis=-1) > floor * 10.0 ** (threshold_db / 10.0)
+
+
+def _detect_onsets_one(records, template, threshold_db):
+    """:func:`detect_onsets` for the records (3, n) of one burst, as Python scalars.
+
+    Returns
+    -------
+    onsets : list of int
+        Sample index of each record's burst start.
+    detected : bool
+        The burst stands out of the noise on every record.
+    """
+    envelope = _envelope(records, template)
+    onsets = envelope.argmax(axis=-1).tolist()
+    peaks = envelope.max(axis=-1).tolist()
+    # The envelope is ours: partition it in place instead of copying it.
+    size = envelope.shape[-1]
+    half = size // 2
+    if size % 2:
+        envelope.partition(half, axis=-1)
+        medians = envelope[:, half].tolist()
+    else:
+        envelope.partition((half - 1, half), axis=-1)
+        medians = (0.5 * (envelope[:, half - 1] + envelope[:, half])).tolist()
+    factor = 10.0 ** (threshold_db / 10.0)
+    detected = all(peak > max(median, _TINY) * factor for peak, median in zip(peaks, medians))
+    return onsets, detected
+
+
+def _envelope(records, template):
+    """Squared envelope of the matched filter's output at each start, shape (..., n - m + 1).
+
+    Scaled by ``n_fft**2``: the inverse FFT is left unnormalised (``norm="forward"``), which
+    saves its scaling pass (a third of its cost). A power of two scales exactly, so the peak's
+    position and its ratio to the median, all the detector uses, are the same numbers.
+    """
     n = records.shape[-1]
     template = np.ascontiguousarray(template, dtype=float)
     n_fft, analytic_filter = _analytic_matched_filter(n, template.tobytes())
+    spectrum = np.fft.rfft(records, n_fft, axis=-1)
+    spectrum *= analytic_filter
     # The inverse of the positive-frequency half (zero-padded to n_fft) is the analytic signal.
-    analytic = np.fft.ifft(np.fft.rfft(records, n_fft, axis=-1) * analytic_filter, n_fft, axis=-1)
-    envelope = np.abs(analytic[..., : n - template.size + 1]) ** 2
-    peak = envelope.argmax(axis=-1)
-    floor = np.maximum(_median(envelope), np.finfo(float).tiny)
-    return peak, envelope.max(axis=-1) > floor * 10.0 ** (threshold_db / 10.0)
+    analytic = np.fft.ifft(spectrum, n_fft, axis=-1, norm="forward")
+    envelope = np.abs(analytic[..., : n - template.size + 1])
+    return np.square(envelope, out=envelope)
 
 
 @functools.lru_cache(maxsize=32)

@@ -3,8 +3,8 @@
 import numpy as np
 
 from ._rows import row_offsets
-from .gcc import estimate_pair_delays
-from .onset import detect_onsets
+from .gcc import _estimate_pair_delays_one, estimate_pair_delays
+from .onset import _detect_onsets_one, detect_onsets
 
 __all__ = ["TdoaMeasurement", "measure_tdoas"]
 
@@ -65,6 +65,24 @@ def measure_tdoas(records, settings):
                                     settings.max_lag, settings.weighting)
     return TdoaMeasurement(estimate.delay[..., 0], estimate.delay[..., 1], estimate.quality,
                            detected.all(axis=-1), estimate.at_bound.any(axis=-1))
+
+
+def _measure_tdoas_one(records, settings):
+    """:func:`measure_tdoas` for the records (3, n) of one burst, as Python scalars.
+
+    The same numbers as :func:`measure_tdoas` on a (3, n) array; :attr:`TdoaMeasurement.quality`
+    is a list of the two pairs' qualities.
+    """
+    if records.shape[-1] < settings.window_samples:
+        measurement = measure_tdoas(records, settings)
+        return TdoaMeasurement(float(measurement.tdoa_12), float(measurement.tdoa_23),
+                               measurement.quality.tolist(), bool(measurement.detected),
+                               bool(measurement.at_bound))
+    onsets, detected = _detect_onsets_one(records, settings.template, settings.onset_threshold_db)
+    pairs = _pair_windows_single(records, onsets, settings)
+    delays, qualities, at_bound = _estimate_pair_delays_one(
+        pairs, settings.sample_rate, settings.passband, settings.max_lag, settings.weighting)
+    return TdoaMeasurement(delays[0], delays[1], qualities, detected, at_bound)
 
 
 def _pair_windows(records, onsets, settings):
