@@ -56,26 +56,30 @@ class TrapezoidProfile:
 
     def distance(self, t):
         """Distance covered [m] at time ``t`` [s] after the start (0 before, ``length`` after)."""
-        if t <= 0.0:
-            return 0.0
-        if t >= self.duration:
-            return self.length
-        if t < self.t_ramp:
-            return 0.5 * self.a_max * t * t
-        if t < self.t_ramp + self.t_cruise:
-            return self.d_ramp + self.v_peak * (t - self.t_ramp)
-        to_go = self.duration - t
-        return self.length - 0.5 * self.a_max * to_go * to_go
+        return self.distance_and_speed(t)[0]
 
     def speed(self, t):
         """Speed [m/s] at time ``t`` [s] after the start."""
-        if t <= 0.0 or t >= self.duration:
-            return 0.0
+        return self.distance_and_speed(t)[1]
+
+    def distance_and_speed(self, t):
+        """:meth:`distance` [m] and :meth:`speed` [m/s] at time ``t`` [s], in one evaluation.
+
+        Examples
+        --------
+        >>> TrapezoidProfile(1.0, 0.2, 0.2).distance_and_speed(0.5)
+        (0.025, 0.1)
+        """
+        if t <= 0.0:
+            return 0.0, 0.0
+        if t >= self.duration:
+            return self.length, 0.0
         if t < self.t_ramp:
-            return self.a_max * t
+            return 0.5 * self.a_max * t * t, self.a_max * t
         if t < self.t_ramp + self.t_cruise:
-            return self.v_peak
-        return self.a_max * (self.duration - t)
+            return self.d_ramp + self.v_peak * (t - self.t_ramp), self.v_peak
+        to_go = self.duration - t
+        return self.length - 0.5 * self.a_max * to_go * to_go, self.a_max * to_go
 
     def acceleration(self, t):
         """Acceleration [m/s^2] at time ``t`` [s] after the start."""

@@ -51,27 +51,44 @@ class PolylinePath:
         self.cumulative = np.concatenate(([0.0], np.cumsum(self.segment_lengths)))
         self.length = float(self.cumulative[-1])
         self.heading = float(heading)
+        # Plain-float copies for the per-step look-ups: numpy on scalars costs microseconds.
+        self._xs = self.points[:, 0].tolist()
+        self._ys = self.points[:, 1].tolist()
+        self._segment_lengths = self.segment_lengths.tolist()
+        self._cumulative = self.cumulative.tolist()
+        self._last_segment = len(self._segment_lengths) - 1
+        self._heading_cos, self._heading_sin = math.cos(self.heading), math.sin(self.heading)
 
     def position(self, s):
         """Point [m] at arc length ``s`` [m] (clamped to the path)."""
-        if len(self.points) == 1:
-            return float(self.points[0, 0]), float(self.points[0, 1])
-        i = self._segment(s)
-        fraction = (min(max(s, 0.0), self.length) - self.cumulative[i]) / self.segment_lengths[i]
-        point = self.points[i] + fraction * (self.points[i + 1] - self.points[i])
-        return float(point[0]), float(point[1])
+        x, y, _, _ = self.pose(s)
+        return x, y
 
     def tangent(self, s):
         """Unit direction of travel at arc length ``s`` (of the segment that starts there)."""
-        if len(self.points) == 1:
-            return math.cos(self.heading), math.sin(self.heading)
-        i = self._segment(s)
-        direction = (self.points[i + 1] - self.points[i]) / self.segment_lengths[i]
-        return float(direction[0]), float(direction[1])
+        _, _, tangent_x, tangent_y = self.pose(s)
+        return tangent_x, tangent_y
 
-    def _segment(self, s):
-        i = int(np.searchsorted(self.cumulative, s, side="right")) - 1
-        return min(max(i, 0), len(self.segment_lengths) - 1)
+    def pose(self, s):
+        """Point [m] and unit direction of travel at arc length ``s`` [m], in one look-up.
+
+        Returns
+        -------
+        tuple of float
+            ``(x, y, tangent_x, tangent_y)``; see :meth:`position` and :meth:`tangent`.
+        """
+        xs, ys = self._xs, self._ys
+        if len(xs) == 1:
+            return xs[0], ys[0], self._heading_cos, self._heading_sin
+        cumulative = self._cumulative
+        i = bisect.bisect_right(cumulative, s) - 1
+        i = 0 if i < 0 else (self._last_segment if i > self._last_segment else i)
+        segment_length = self._segment_lengths[i]
+        dx, dy = xs[i + 1] - xs[i], ys[i + 1] - ys[i]
+        s = 0.0 if s < 0.0 else (self.length if self.length < s else s)
+        fraction = (s - cumulative[i]) / segment_length
+        return (xs[i] + fraction * dx, ys[i] + fraction * dy,
+                dx / segment_length, dy / segment_length)
 
 
 class SCurvePath:
@@ -107,10 +124,12 @@ class SCurvePath:
         self._s_list = self.s_table.tolist()
         self._u_list = self.u_table.tolist()
         self._du_ds_list = self.du_ds_table.tolist()
-
-    def _offset(self, u):
-        phase = math.pi * u / self.forward_length
-        return _PEAK_GAIN * self.amplitude * math.sin(phase) ** 3 * math.cos(phase)
+        self._last_interval = len(self._s_list) - 2
+        self._heading_cos, self._heading_sin = math.cos(self.heading0), math.sin(self.heading0)
+        # The leading factors of the offset and its slope, multiplied in the same order as
+        # written out in full, so that hoisting them changes no bit of the result.
+        self._offset_gain = _PEAK_GAIN * self.amplitude
+        self._slope_gain = _PEAK_GAIN * self.amplitude * math.pi / self.forward_length
 
     def _slope(self, u):
         phase = np.pi * np.asarray(u) / self.forward_length
@@ -118,37 +137,48 @@ class SCurvePath:
         return (_PEAK_GAIN * self.amplitude * np.pi / self.forward_length
                 * np.sin(phase) ** 2 * (3.0 * np.cos(phase) ** 2 - np.sin(phase) ** 2))
 
-    def _forward(self, s):
-        s_list, u_list, du_ds = self._s_list, self._u_list, self._du_ds_list
-        s = min(max(s, 0.0), self.length)
-        i = min(bisect.bisect_right(s_list, s) - 1, len(s_list) - 2)
-        width = s_list[i + 1] - s_list[i]
-        t = (s - s_list[i]) / width
-        t2, t3 = t * t, t * t * t
-        return ((2 * t3 - 3 * t2 + 1) * u_list[i]
-                + (t3 - 2 * t2 + t) * width * du_ds[i]
-                + (-2 * t3 + 3 * t2) * u_list[i + 1]
-                + (t3 - t2) * width * du_ds[i + 1])
-
-    def _slope_at(self, u):
-        phase = math.pi * u / self.forward_length
-        sine, cosine = math.sin(phase), math.cos(phase)
-        return (_PEAK_GAIN * self.amplitude * math.pi / self.forward_length
-                * sine * sine * (3.0 * cosine * cosine - sine * sine))
-
     def position(self, s):
         """Point [m] at arc length ``s`` [m] (clamped to the path)."""
-        u = self._forward(s)
-        w = self._offset(u)
-        c, d = math.cos(self.heading0), math.sin(self.heading0)
-        return self.x0 + u * c - w * d, self.y0 + u * d + w * c
+        x, y, _, _ = self.pose(s)
+        return x, y
 
     def tangent(self, s):
         """Unit direction of travel at arc length ``s``."""
-        slope = self._slope_at(self._forward(s))
+        _, _, tangent_x, tangent_y = self.pose(s)
+        return tangent_x, tangent_y
+
+    def pose(self, s):
+        """Point [m] and unit direction of travel at arc length ``s`` [m], in one look-up.
+
+        Returns
+        -------
+        tuple of float
+            ``(x, y, tangent_x, tangent_y)``; see :meth:`position` and :meth:`tangent`.
+        """
+        # u(s): cubic Hermite interpolation in the arc-length table (written out here, not
+        # called, because this runs every source step).
+        s_list, u_list, du_ds = self._s_list, self._u_list, self._du_ds_list
+        s = 0.0 if s < 0.0 else (self.length if self.length < s else s)
+        i = bisect.bisect_right(s_list, s) - 1
+        if i > self._last_interval:
+            i = self._last_interval
+        width = s_list[i + 1] - s_list[i]
+        t = (s - s_list[i]) / width
+        t2 = t * t
+        t3 = t2 * t
+        u = ((2 * t3 - 3 * t2 + 1) * u_list[i]
+             + (t3 - 2 * t2 + t) * width * du_ds[i]
+             + (-2 * t3 + 3 * t2) * u_list[i + 1]
+             + (t3 - t2) * width * du_ds[i + 1])
+        phase = math.pi * u / self.forward_length
+        sine, cosine = math.sin(phase), math.cos(phase)
+        offset = self._offset_gain * sine ** 3 * cosine
+        # d/du of sin^3 cos = (pi/l) sin^2 (3 cos^2 - sin^2)
+        slope = self._slope_gain * sine * sine * (3.0 * cosine * cosine - sine * sine)
         norm = math.hypot(1.0, slope)
-        c, d = math.cos(self.heading0), math.sin(self.heading0)
-        return (c - slope * d) / norm, (d + slope * c) / norm
+        c, d = self._heading_cos, self._heading_sin
+        return (self.x0 + u * c - offset * d, self.y0 + u * d + offset * c,
+                (c - slope * d) / norm, (d + slope * c) / norm)
 
 
 _PEAK_GAIN = 16.0 / (3.0 * math.sqrt(3.0))

@@ -79,14 +79,12 @@ class MovingSource:
         """Set the outputs to their values at time ``t`` [s]."""
         elapsed = t - self.start_delay
         self.time = float(t)
-        self.progress = self.profile.distance(elapsed)
-        self.speed = self.profile.speed(elapsed)
-        self.x, self.y = self.path.position(self.progress)
+        progress, speed = self.profile.distance_and_speed(elapsed)
+        self.progress, self.speed = progress, speed
+        x, y, tangent_x, tangent_y = self.path.pose(progress)
         if 0.0 <= self.switch_time <= t:
-            self.x, self.y = self.second_position
-        tangent_x, tangent_y = self.path.tangent(self.progress)
+            x, y = self.second_position
+        self.x, self.y = x, y
         self.heading = math.atan2(tangent_y, tangent_x)
-        self.vx, self.vy = self.speed * tangent_x, self.speed * tangent_y
-        self.emitting = self.bursts.emitting(t)
-        self.burst_count = self.bursts.burst_count(t)
-        self.last_burst_time = self.bursts.last_burst_time(t)
+        self.vx, self.vy = speed * tangent_x, speed * tangent_y
+        self.emitting, self.burst_count, self.last_burst_time = self.bursts.state(t)
