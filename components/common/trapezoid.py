@@ -153,7 +153,24 @@ def next_speed(current, cruise, remaining, a_max, step):
     float
         Speed to hold for the next step [m/s], >= 0, within ``a_max * step`` of ``current``.
     """
-    target = min(cruise, current + a_max * step, braking_speed(remaining, a_max, step))
+    change = a_max * step
+    # min() and max() of three written as comparisons (the planner calls this every step):
+    # the same picks, the first of equal values, without the calls.
+    target = cruise
+    if current + change < target:
+        target = current + change
+    # Far from the end the braking speed exceeds target and is not worth its square root:
+    # braking from target covers D(target) <= (target + a_max step / 2)^2 / (2 a_max) (the
+    # staircase of braking_speed), and D is increasing, so D(target) < remaining means
+    # braking_speed(remaining) > target. The margin of 1e-6 dwarfs any rounding; a NaN or
+    # infinite remaining still goes to braking_speed, which rejects it.
+    reach = target + 0.5 * change
+    if not reach * reach < 2.0 * a_max * remaining * (1.0 - 1e-6) < math.inf:
+        braking = braking_speed(remaining, a_max, step)
+        if braking < target:
+            target = braking
     # If the end was overshot (remaining < 0) or the cruise speed dropped, brake as hard as
     # allowed rather than stepping the speed.
-    return max(target, current - a_max * step, 0.0)
+    if current - change > target:
+        target = current - change
+    return 0.0 if target < 0.0 else target

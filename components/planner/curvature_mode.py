@@ -1,6 +1,6 @@
 """The paper's mode: one constant-curvature arc per fix, progress counted by the encoders."""
 
-from .arc_drive import arc_wheel_speeds
+from .arc_drive import arc_limits, arc_wheel_speeds
 from .geometry import arc_curvature, arc_length, stop_arc_length, wheel_arc_lengths
 
 __all__ = ["CurvatureMode"]
@@ -30,6 +30,8 @@ class CurvatureMode:
         self.turning = False
         self.wheel_arc_left = 0.0
         self.wheel_arc_right = 0.0
+        # arc_limits of the curvature, kept from plan to plan instead of recomputed each step
+        self.arc = None
 
     def on_fix(self, planner, distance, bearing):
         """Plan the arc to a new fix seen from the current pose."""
@@ -42,15 +44,18 @@ class CurvatureMode:
 
     def remaining(self):
         """Centre arc length still to drive [m]."""
-        return max(self.length - self.progress, 0.0)
+        remaining = self.length - self.progress
+        return 0.0 if remaining < 0.0 else remaining
 
     def command(self, planner, step):
         """Wanted wheel speeds [m/s] for the next step."""
         if self.reaim_pending and planner.has_target:
             self.reaim_pending = False
             self._plan(planner, *planner.odometry.polar_of(planner.target_x, planner.target_y))
+        if self.arc is None:
+            self.arc = arc_limits(planner, self.curvature)
         return arc_wheel_speeds(planner, planner.v_ref_left, planner.v_ref_right,
-                                self.curvature, self.length - self.progress, step)
+                                self.curvature, self.length - self.progress, step, self.arc)
 
     def after_limit(self, fraction):
         """Note whether the wheel-speed blend is still under way after limiting."""
@@ -71,3 +76,4 @@ class CurvatureMode:
                            - stop_arc_length(self.curvature, planner.stop_distance))
         self.wheel_arc_left, self.wheel_arc_right = wheel_arc_lengths(
             self.curvature, self.length, planner.track_width)
+        self.arc = arc_limits(planner, self.curvature)

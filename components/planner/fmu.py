@@ -1,5 +1,7 @@
 """The CurvaturePlanner FMU: a thin pythonfmu slave around :class:`TargetPlanner`."""
 
+from math import isfinite
+
 from ..common.errors import InputError, SonotrackError
 from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
 from .geometry import RADIUS_STRAIGHT
@@ -83,28 +85,33 @@ class CurvaturePlanner(SonotrackSlave):
             raise
 
     def do_step(self, current_time, step_size):
-        ports = ("wheel_speed_left", "wheel_speed_right", "distance", "bearing")
-        port = self.first_non_finite(ports if self.valid else ports[:2])
-        if port is not None:
+        left, right = self.wheel_speed_left, self.wheel_speed_right
+        valid, distance, bearing = self.valid, self.distance, self.bearing
+        # One test for the usual all-finite case; the bad port is looked for only on failure.
+        if not (isfinite(left) and isfinite(right)
+                and (not valid or (isfinite(distance) and isfinite(bearing)))):
+            ports = ("wheel_speed_left", "wheel_speed_right", "distance", "bearing")
+            port = self.first_non_finite(ports if valid else ports[:2])
             return self.refuse(port, getattr(self, port), "not finite")
         if not step_size > 0.0:
             return self.refuse("step_size", step_size, "must be > 0")
         core = self.core
         try:
             self.v_ref_left, self.v_ref_right = core.update(
-                current_time, step_size, self.wheel_speed_left, self.wheel_speed_right,
-                self.measurement_id, self.valid, self.distance, self.bearing)
+                current_time, step_size, left, right, self.measurement_id, valid, distance,
+                bearing)
         except InputError as exc:
-            return self.refuse("bearing", self.bearing, str(exc))
+            return self.refuse("bearing", bearing, str(exc))
         if core.fix_outcome == FIX_NEGATIVE:
             self.log_once(f"negative fix {self.measurement_id}",
-                          f"fix {self.measurement_id}: distance = {self.distance!r} m is "
+                          f"fix {self.measurement_id}: distance = {distance!r} m is "
                           "negative; fix ignored")
+        mode = core.mode
         self.radius = core.radius
-        self.curvature = core.curvature
-        self.arc_remaining = core.arc_remaining
+        self.curvature = mode.curvature
+        self.arc_remaining = mode.remaining()
         self.state = core.state
         self.target_x, self.target_y = core.target_x, core.target_y
-        self.wheel_arc_left = core.mode.wheel_arc_left
-        self.wheel_arc_right = core.mode.wheel_arc_right
+        self.wheel_arc_left = mode.wheel_arc_left
+        self.wheel_arc_right = mode.wheel_arc_right
         return True

@@ -27,7 +27,9 @@ def limit_wheel_change(left, right, desired_left, desired_right, max_change):
     """
     change_left = desired_left - left
     change_right = desired_right - right
-    largest = max(abs(change_left), abs(change_right))
+    largest = abs(change_left)
+    if abs(change_right) > largest:  # max() as a comparison: this runs every planner step
+        largest = abs(change_right)
     if largest <= max_change * (1.0 + 1e-12):
         return desired_left, desired_right, 1.0
     fraction = max_change / largest

@@ -32,16 +32,18 @@ class Odometry:
         """
         speed = 0.5 * (wheel_speed_left + wheel_speed_right)
         turn = (wheel_speed_right - wheel_speed_left) / self.track_width * duration
-        if abs(turn) < 1e-9:
+        heading = self.heading
+        end_heading = heading + turn
+        if -1e-9 < turn < 1e-9:
             # Second-order expansion of the arc about its midpoint heading.
-            mid = self.heading + 0.5 * turn
+            mid = heading + 0.5 * turn
             self.x += speed * duration * math.cos(mid)
             self.y += speed * duration * math.sin(mid)
         else:
             radius = speed * duration / turn
-            self.x += radius * (math.sin(self.heading + turn) - math.sin(self.heading))
-            self.y -= radius * (math.cos(self.heading + turn) - math.cos(self.heading))
-        self.heading += turn
+            self.x += radius * (math.sin(end_heading) - math.sin(heading))
+            self.y -= radius * (math.cos(end_heading) - math.cos(heading))
+        self.heading = end_heading
 
     def point_at(self, distance, bearing):
         """Odometry-frame coordinates of a point seen at ``distance`` [m] and ``bearing`` [rad]."""

@@ -86,7 +86,8 @@ class TargetPlanner:
     @property
     def radius(self):
         """Radius of the path being driven [m]: 0 when turning on the spot, 1e6 when straight."""
-        return 0.0 if self.mode.turning else radius_of(self.mode.curvature)
+        mode = self.mode
+        return 0.0 if mode.turning else radius_of(mode.curvature)
 
     @property
     def arc_remaining(self):
@@ -128,10 +129,11 @@ class TargetPlanner:
         measurement_id, valid = int(measurement_id), bool(valid)
         new_fix = measurement_id != self.last_measurement_id
         # Check every input before touching any state, so a refused step can be retried.
-        for port, value in (("wheel_speed_left", wheel_speed_left),
-                            ("wheel_speed_right", wheel_speed_right)):
-            if not math.isfinite(value):
-                raise InputError(f"{port} = {value!r}: must be finite")
+        if not (math.isfinite(wheel_speed_left) and math.isfinite(wheel_speed_right)):
+            for port, value in (("wheel_speed_left", wheel_speed_left),
+                                ("wheel_speed_right", wheel_speed_right)):
+                if not math.isfinite(value):
+                    raise InputError(f"{port} = {value!r}: must be finite")
         if new_fix and valid:
             for port, value in (("distance", distance), ("bearing", bearing)):
                 if not math.isfinite(value):
@@ -143,17 +145,27 @@ class TargetPlanner:
         self.started = True
         self.last_time = float(time)
         self.odometry.advance(wheel_speed_left, wheel_speed_right, elapsed)
-        self.mode.record_progress(wheel_speed_left * elapsed, wheel_speed_right * elapsed)
+        mode = self.mode
+        mode.record_progress(wheel_speed_left * elapsed, wheel_speed_right * elapsed)
         self.fix_outcome = FIX_NONE
         if new_fix:
             self._observe(measurement_id, valid, distance, bearing)
 
-        desired_left, desired_right = self.mode.command(self, step_size)
-        left, right, fraction = limit_wheel_change(self.v_ref_left, self.v_ref_right,
+        desired_left, desired_right = mode.command(self, step_size)
+        previous_left, previous_right = self.v_ref_left, self.v_ref_right
+        left, right, fraction = limit_wheel_change(previous_left, previous_right,
                                                    desired_left, desired_right,
                                                    self.a_max * step_size)
-        self.mode.after_limit(fraction)
-        self.state = self._classify(left, right)
+        mode.after_limit(fraction)
+        # The state output, classified here rather than in a helper (this runs every step).
+        if left == 0.0 and right == 0.0 and previous_left == 0.0 and previous_right == 0.0:
+            self.state = IDLE
+        elif mode.turning:
+            self.state = TURNING
+        elif abs(left + right) < abs(previous_left + previous_right) - 1e-12:
+            self.state = STOPPING
+        else:
+            self.state = MOVING
         self.v_ref_left, self.v_ref_right = left, right
         return left, right
 
@@ -168,12 +180,3 @@ class TargetPlanner:
             self.has_target = True
             self.target_x, self.target_y = self.odometry.point_at(distance, bearing)
             self.mode.on_fix(self, distance, bearing)
-
-    def _classify(self, left, right):
-        if left == 0.0 and right == 0.0 and self.v_ref_left == 0.0 and self.v_ref_right == 0.0:
-            return IDLE
-        if self.mode.turning:
-            return TURNING
-        if abs(left + right) < abs(self.v_ref_left + self.v_ref_right) - 1e-12:
-            return STOPPING
-        return MOVING

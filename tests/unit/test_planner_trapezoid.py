@@ -57,3 +57,21 @@ def test_overshoot_brakes_at_the_limit_instead_of_stopping_at_once():
     assert next_speed(0.3, 0.3, -0.1, 0.4, 0.1) == pytest.approx(0.26)
     assert next_speed(0.02, 0.3, -0.1, 0.4, 0.1) == 0.0
     assert math.isclose(braking_speed(0.0, 0.4, 0.1), 0.0)
+
+
+@settings(max_examples=500, deadline=None)
+@given(current=st.floats(-0.5, 1.0), cruise=st.floats(0.0, 1.0), a_max=st.floats(0.05, 2.0),
+       step=st.floats(0.001, 0.2), scale=st.floats(0.0, 3.0), nudge=st.integers(-3, 3))
+def test_next_speed_is_the_documented_min_max_exactly(current, cruise, a_max, step, scale,
+                                                      nudge):
+    # next_speed skips braking_speed far from the end; it must still equal, bit for bit,
+    # V = max(min(cruise, V + a h, v(r)), V - a h, 0) (docs/planner.md). The remaining
+    # distance is drawn around the braking distance of min(cruise, V + a h), where the
+    # shortcut switches, down to a few ulps from it.
+    held = min(cruise, current + a_max * step)
+    remaining = scale * (held + 0.5 * a_max * step) ** 2 / (2.0 * a_max)
+    for _ in range(abs(nudge)):
+        remaining = math.nextafter(remaining, math.copysign(math.inf, nudge))
+    expected = max(min(cruise, current + a_max * step, braking_speed(remaining, a_max, step)),
+                   current - a_max * step, 0.0)
+    assert next_speed(current, cruise, remaining, a_max, step) == expected
