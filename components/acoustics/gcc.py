@@ -96,7 +96,9 @@ def _integer_lag_correlation(whitened, grid):
     else:
         spectrum = np.zeros(whitened.shape[:-1] + (grid.n_freqs,), dtype=complex)
         spectrum[..., grid.band] = whitened
-    return np.fft.irfft(spectrum, grid.n_fft, axis=-1, norm="forward")[..., grid.lag_index]
+    # take(): the same gather as fancy indexing at a third of its cost.
+    return np.fft.irfft(spectrum, grid.n_fft, axis=-1, norm="forward").take(grid.lag_index,
+                                                                            axis=-1)
 
 
 def estimate_delays(u, v, sample_rate, passband, max_lag, weighting="band"):
@@ -222,32 +224,44 @@ def _estimate_pair_delays_one(pairs, sample_rate, passband, max_lag, weighting):
     weighted = grid.fold * whitened
 
     correlation = _integer_lag_correlation(whitened, grid)
-    limit, last = int(grid.lags[-1]), grid.lags.size - 2
+    size = correlation.shape[-1]
+    peaks = correlation.argmax(axis=-1).tolist()
+    # Parabola through each peak and its neighbours (clamped at the bound) as Newton's start.
+    inners = [min(max(peak, 1), size - 2) for peak in peaks]
+    neighbours = correlation.take([row * size + inner + offset for row, inner in enumerate(inners)
+                                   for offset in (-1, 0, 1)]).tolist()
+    limit = size // 2
     lags, bounds = [], []
-    at_bound = False
-    for row, peak in zip(correlation, correlation.argmax(axis=-1).tolist()):
-        # Parabola through the peak and its neighbours (clamped at the bound) as Newton's start.
-        inner = min(max(peak, 1), last)
-        left, centre, right = row[inner - 1:inner + 2].tolist()
+    for pair, (peak, inner) in enumerate(zip(peaks, inners)):
+        left, centre, right = neighbours[3 * pair:3 * pair + 3]
         curvature = left - 2.0 * centre + right
         offset = 0.5 * (left - right) / curvature if curvature < 0.0 else 0.0
         peak_lag = peak - limit
-        if inner != peak:
-            at_bound = True
-            lags.append(peak_lag + 0.0)
-        else:
-            lags.append(peak_lag + min(max(offset, -0.5), 0.5))
+        lags.append(peak_lag + (0.0 if inner != peak else min(max(offset, -0.5), 0.5)))
         bounds.append((peak_lag - 1.0, peak_lag + 1.0))
+    at_bound = inners != peaks
+
+    # exp() of j omega lag with a zero real part: the rotation exp(j_omega * lag) gives, whose
+    # real part is a signed zero (exp(+-0) is 1 either way), for a real product instead of a
+    # complex one.
+    phase = np.zeros(weighted.shape, dtype=complex)
+    phase_imag = phase.imag
+    lag_column = np.empty((len(lags), 1))
+
+    def rotated_at(lags):
+        """``weighted * exp(j_omega * lag)`` for each pair's lag."""
+        lag_column[:, 0] = lags
+        np.multiply(lag_column, grid.omega, out=phase_imag)
+        rotated = np.exp(phase)
+        return np.multiply(weighted, rotated, out=rotated)
+
     for _ in range(_NEWTON_STEPS):
-        rotated = np.exp(grid.j_omega * np.array(lags)[:, None])
-        np.multiply(weighted, rotated, out=rotated)
-        derivatives = (rotated.view(float) @ grid.slope_and_curvature).tolist()
+        derivatives = (rotated_at(lags).view(float) @ grid.slope_and_curvature).tolist()
         for pair, ((slope, curving), (lowest, highest)) in enumerate(zip(derivatives, bounds)):
             step = slope / curving if curving > 0.0 else 0.0
             lags[pair] = min(max(lags[pair] + min(max(step, -0.5), 0.5), lowest), highest)
     lags = [min(max(lag, -grid.max_samples), grid.max_samples) for lag in lags]
-    rotated = np.exp(grid.j_omega * np.array(lags)[:, None])
-    np.multiply(weighted, rotated, out=rotated)
-    heights = rotated.real.sum(axis=-1).tolist()
+    # np.add.reduce is ndarray.sum without its Python wrapper.
+    heights = np.add.reduce(rotated_at(lags).real, axis=-1).tolist()
     return ([lag / sample_rate for lag in lags],
             [height / norm for height, norm in zip(heights, norms)], at_bound)

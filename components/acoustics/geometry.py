@@ -50,7 +50,8 @@ def microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading, mic_s
     list of float
         ``[R1, R2, R3]`` [m].
     """
-    # math.cos and math.sin give np.cos's and np.sin's bits; np.hypot and math.hypot differ.
+    # math.cos and math.sin give np.cos's and np.sin's bits (glibc's, both); np.hypot and
+    # math.hypot differ in the last bit.
     cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
     centre_x = robot_x + array_offset * cos_h
     centre_y = robot_y + array_offset * sin_h
@@ -119,3 +120,20 @@ def robot_polar(distance, bearing, array_offset):
     forward = array_offset + distance * np.cos(bearing)
     left = distance * np.sin(bearing)
     return np.hypot(forward, left), np.arctan2(left, forward)
+
+
+def _source_in_array_frame_one(source_x, source_y, robot_x, robot_y, robot_heading,
+                               array_offset):
+    """:func:`source_in_array_frame` for floats, in Python floats (the same bits)."""
+    dx = source_x - robot_x
+    dy = source_y - robot_y
+    cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
+    return cos_h * dx + sin_h * dy - array_offset, -sin_h * dx + cos_h * dy
+
+
+def _robot_polar_one(distance, bearing, array_offset):
+    """:func:`robot_polar` for floats, in Python floats (the same bits)."""
+    forward = array_offset + distance * math.cos(bearing)
+    left = distance * math.sin(bearing)
+    # np.hypot and np.arctan2, not math's: their results differ in the last bit.
+    return float(np.hypot(forward, left)), float(np.arctan2(left, forward))

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..common.errors import InputError
 from .estimators import make_estimator
-from .geometry import microphone_ranges, robot_polar, source_in_array_frame
+from .geometry import _robot_polar_one, _source_in_array_frame_one, microphone_ranges
 from .settings import LocalizerSettings
 from .synthesis import _synthesise_one, synthesise_records
 from .tdoa import _measure_tdoas_one, measure_tdoas
@@ -216,11 +216,10 @@ class LocalizerCore:
 
     def _attempt(self, source_x, source_y, emitting, robot_x, robot_y, robot_heading):
         s = self.settings
-        forward, left = source_in_array_frame(source_x, source_y, robot_x, robot_y,
-                                              robot_heading, s.array_offset)
-        true_distance, true_bearing = robot_polar(math.hypot(forward, left),
-                                                  math.atan2(left, forward), s.array_offset)
-        self.true_distance, self.true_bearing = float(true_distance), float(true_bearing)
+        forward, left = _source_in_array_frame_one(source_x, source_y, robot_x, robot_y,
+                                                   robot_heading, s.array_offset)
+        self.true_distance, self.true_bearing = _robot_polar_one(
+            math.hypot(forward, left), math.atan2(left, forward), s.array_offset)
         range_2 = math.hypot(forward, left)
         # The array cannot tell front from back (a line array's delays are mirror-symmetric),
         # and the robot's body shadows sound from behind: only the front half-plane is heard.
@@ -239,8 +238,8 @@ class LocalizerCore:
             status = fixes.status
             self.peak_quality = fixes.quality
             if status == FixStatus.OK:
-                distance, bearing = robot_polar(fixes.distance, fixes.bearing, s.array_offset)
-                self.distance, self.bearing = float(distance), float(bearing)
+                self.distance, self.bearing = _robot_polar_one(fixes.distance, fixes.bearing,
+                                                               s.array_offset)
                 self.tdoa_12 = fixes.tdoa_12
                 self.tdoa_23 = fixes.tdoa_23
                 self.measurement_id += 1

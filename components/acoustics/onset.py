@@ -53,9 +53,9 @@ def _detect_onsets_one(records, template, threshold_db):
     """
     envelope = _envelope(records, template)
     onsets = envelope.argmax(axis=-1).tolist()
-    peaks = envelope.max(axis=-1).tolist()
-    # The envelope is ours: partition it in place instead of copying it.
     size = envelope.shape[-1]
+    peaks = envelope.take([row * size + onset for row, onset in enumerate(onsets)]).tolist()
+    # The envelope is ours: partition it in place instead of copying it.
     half = size // 2
     if size % 2:
         envelope.partition(half, axis=-1)

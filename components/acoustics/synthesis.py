@@ -109,18 +109,22 @@ def _synthesise_one(burst, ranges, *, sample_rate, speed_of_sound, noise_std, ad
     start = math.floor((min(arrivals) - pre_roll) * sample_rate) / sample_rate
     first = [min(max(math.floor((arrival - start) * sample_rate) - 1, 0), n_samples - span)
              for arrival in arrivals]
-    index = np.array(first)[:, None] + _span(span)
-    times = _sample_times(n_samples, float(sample_rate))[index]
+    # The microphones' scalars in one small array: numpy's per-call cost, not the work, counts.
+    columns = np.array([[offset, arrival, REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / distance]
+                        for offset, arrival, distance in zip(first, arrivals, ranges)])
+    # (first + j) / fs is exactly _sample_times(...)[first + j]: integers are exact floats.
+    times = columns[:, :1] + _span(span)
+    times /= sample_rate
     times += start
-    times -= np.array(arrivals)[:, None]
-    gains = np.array([REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / distance for distance in ranges])
-    clean = gains[:, None] * burst.waveform(times)
+    times -= columns[:, 1:2]
+    clean = burst.waveform(times)
+    np.multiply(columns[:, 2:], clean, out=clean)
     records = rng.standard_normal((len(ranges), n_samples))
     records *= noise_std
     # The clean signal is zero off the spans: adding it only on them changes no sample.
-    index += _row_starts(len(ranges), n_samples)
-    flat = records.reshape(-1)
-    flat[index] += clean
+    for row, offset in enumerate(first):
+        span_samples = records[row, offset:offset + span]
+        np.add(span_samples, clean[row], out=span_samples)
     return _quantise(records, adc_bits)
 
 
@@ -129,7 +133,7 @@ def _quantise(records, adc_bits):
     step = quantisation_step(adc_bits)
     half = 2 ** (adc_bits - 1)
     records /= step
-    np.round(records, out=records)
+    np.rint(records, out=records)  # np.round without its Python wrapper
     np.maximum(records, -half, out=records)
     np.minimum(records, half - 1, out=records)
     records *= step
@@ -158,16 +162,9 @@ def _delayed_bursts(burst, gains, arrivals, start, sample_rate, n_samples):
 
 @functools.lru_cache(maxsize=32)
 def _span(span):
-    offsets = np.arange(span)
+    offsets = np.arange(span, dtype=float)
     offsets.setflags(write=False)
     return offsets
-
-
-@functools.lru_cache(maxsize=32)
-def _row_starts(rows, n_samples):
-    starts = np.arange(0, rows * n_samples, n_samples)[:, None]
-    starts.setflags(write=False)
-    return starts
 
 
 @functools.lru_cache(maxsize=32)

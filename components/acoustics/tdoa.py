@@ -112,13 +112,13 @@ def _pair_windows_single(records, onsets, settings):
     per-call overhead, not the work, sets the cost.
     """
     length, margin = settings.window_samples, settings.gate_margin_samples
-    latest = records.shape[-1] - length
+    pre_trigger, latest = settings.pre_trigger_samples, records.shape[-1] - length
+    gates = [(onset - margin, onset + settings.template.size + margin) for onset in onsets]
     pairs = np.zeros((2, 2, length))
     for pair, outer in enumerate((0, 2)):
-        start = min(max(min(onsets[outer], onsets[1]) - settings.pre_trigger_samples, 0), latest)
+        start = min(max(min(onsets[outer], onsets[1]) - pre_trigger, 0), latest)
         for side, mic in enumerate((outer, 1)):
-            low = max(start, onsets[mic] - margin)
-            high = min(start + length, onsets[mic] + settings.template.size + margin)
+            low, high = max(start, gates[mic][0]), min(start + length, gates[mic][1])
             if high > low:
                 pairs[pair, side, low - start:high - start] = records[mic, low:high]
     return pairs
