@@ -1,5 +1,7 @@
 """The WheelController FMU: a thin pythonfmu slave around :class:`WheelSpeedController`."""
 
+from math import isfinite
+
 from ..common.errors import SonotrackError
 from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
 from .controller import DEFAULTS, WheelSpeedController
@@ -81,13 +83,15 @@ class WheelController(SonotrackSlave):
         self.kd = self.core.kd
 
     def do_step(self, current_time, step_size):
-        port = self.first_non_finite(("v_ref", "v_meas"))
-        if port is not None:
+        v_ref, v_meas = self.v_ref, self.v_meas
+        # One test for the usual all-finite case; the bad port is looked for only on failure.
+        if not (isfinite(v_ref) and isfinite(v_meas)):
+            port = self.first_non_finite(("v_ref", "v_meas"))
             return self.refuse(port, getattr(self, port), "not a finite speed")
         if not step_size > 0.0:
             return self.refuse("step_size", step_size, "must be > 0")
         core = self.core
-        self.voltage = core.step(self.v_ref, self.v_meas, step_size)
+        self.voltage = core.step(v_ref, v_meas, step_size)
         self.kp = core.kp
         self.kd = core.kd
         self.error = core.error

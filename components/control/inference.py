@@ -109,16 +109,17 @@ class FuzzyGainScheduler:
         w10 = a1 if a1 < b0 else b0
         w11 = a1 if a1 < b1 else b1
         if self.method == "weighted":
+            # sum(w_i C_i) / sum(w_i) over the four firing rules, for both tables; written out
+            # rather than in a helper called twice, because this runs every control step.
             total = w00 + w01 + w10 + w11
-            return (self._weighted(self.kp_rules, i, j, w00, w01, w10, w11) / total,
-                    self._weighted(self.kd_rules, i, j, w00, w01, w10, w11) / total)
+            kp_row, kp_next_row = self.kp_rules[i], self.kp_rules[i + 1]
+            kd_row, kd_next_row = self.kd_rules[i], self.kd_rules[i + 1]
+            return ((w00 * kp_row[j] + w01 * kp_row[j + 1]
+                     + w10 * kp_next_row[j] + w11 * kp_next_row[j + 1]) / total,
+                    (w00 * kd_row[j] + w01 * kd_row[j + 1]
+                     + w10 * kd_next_row[j] + w11 * kd_next_row[j + 1]) / total)
         return (self._mamdani(self.kp_rules, i, j, w00, w01, w10, w11),
                 self._mamdani(self.kd_rules, i, j, w00, w01, w10, w11))
-
-    @staticmethod
-    def _weighted(rules, i, j, w00, w01, w10, w11):
-        row, next_row = rules[i], rules[i + 1]
-        return (w00 * row[j] + w01 * row[j + 1] + w10 * next_row[j] + w11 * next_row[j + 1])
 
     def _mamdani(self, rules, i, j, w00, w01, w10, w11):
         row, next_row = rules[i], rules[i + 1]
