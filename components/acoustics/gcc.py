@@ -241,17 +241,15 @@ def _estimate_pair_delays_one(pairs, sample_rate, passband, max_lag, weighting):
         bounds.append((peak_lag - 1.0, peak_lag + 1.0))
     at_bound = inners != peaks
 
-    # exp() of j omega lag with a zero real part: the rotation exp(j_omega * lag) gives, whose
-    # real part is a signed zero (exp(+-0) is 1 either way), for a real product instead of a
-    # complex one.
+    # exp(j omega lag) from a phase whose real part stays zero and whose imaginary part is the
+    # real product omega * lag: cheaper than the complex product j_omega * lag, whose real part
+    # is zero too (at most its sign differs, and exp(+-0) = 1), so the same rotations.
     phase = np.zeros(weighted.shape, dtype=complex)
     phase_imag = phase.imag
-    lag_column = np.empty((len(lags), 1))
 
     def rotated_at(lags):
         """``weighted * exp(j_omega * lag)`` for each pair's lag."""
-        lag_column[:, 0] = lags
-        np.multiply(lag_column, grid.omega, out=phase_imag)
+        np.multiply.outer(lags, grid.omega, out=phase_imag)
         rotated = np.exp(phase)
         return np.multiply(weighted, rotated, out=rotated)
 
