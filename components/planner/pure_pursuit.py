@@ -2,8 +2,8 @@
 
 import math
 
-from .arc_drive import ARRIVED, arc_wheel_speeds
-from .geometry import arc_curvature, arc_length, stop_arc_length, wheel_arc_lengths
+from .arc_drive import ARRIVED, arc_limits, arc_wheel_speeds
+from .geometry import arc_curvature, arc_length, stop_arc_length
 
 __all__ = ["PurePursuitMode"]
 
@@ -47,10 +47,13 @@ class PurePursuitMode:
                 self.curvature = arc_curvature(distance, bearing)
                 self.length = (arc_length(distance, bearing)
                                - stop_arc_length(self.curvature, planner.stop_distance))
-        self.wheel_arc_left, self.wheel_arc_right = wheel_arc_lengths(
-            self.curvature, self.length, planner.track_width)
+        arc = arc_limits(planner, self.curvature)
+        # wheel_arc_lengths (Eq. 38) from the wheel factors arc_limits has just computed
+        factor_left, factor_right = arc[0], arc[1]
+        self.wheel_arc_left, self.wheel_arc_right = (factor_left * self.length,
+                                                     factor_right * self.length)
         return arc_wheel_speeds(planner, planner.v_ref_left, planner.v_ref_right,
-                                self.curvature, self.length, step)
+                                self.curvature, self.length, step, arc)
 
     def after_limit(self, fraction):
         """Pure pursuit needs no bookkeeping of blends."""
