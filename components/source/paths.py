@@ -29,7 +29,26 @@ BUILT_IN_PATHS = ("straight", "s_curve", "static")
 _S_CURVE_SAMPLES = 1001
 
 
-class PolylinePath:
+class _Path:
+    """What every path offers: :meth:`pose`, and position and tangent read from it."""
+
+    def pose(self, s):
+        """``(x, y, tangent_x, tangent_y)`` at arc length ``s`` [m]."""
+        raise NotImplementedError
+
+    def position(self, s):
+        """Point [m] at arc length ``s`` [m] (clamped to the path)."""
+        x, y, _, _ = self.pose(s)
+        return x, y
+
+    def tangent(self, s):
+        """Unit direction of travel at arc length ``s`` (on a polyline: of the segment that
+        starts there)."""
+        _, _, tangent_x, tangent_y = self.pose(s)
+        return tangent_x, tangent_y
+
+
+class PolylinePath(_Path):
     """Straight segments through waypoints; a single point is a static path.
 
     Parameters
@@ -59,16 +78,6 @@ class PolylinePath:
         self._last_segment = len(self._segment_lengths) - 1
         self._heading_cos, self._heading_sin = math.cos(self.heading), math.sin(self.heading)
 
-    def position(self, s):
-        """Point [m] at arc length ``s`` [m] (clamped to the path)."""
-        x, y, _, _ = self.pose(s)
-        return x, y
-
-    def tangent(self, s):
-        """Unit direction of travel at arc length ``s`` (of the segment that starts there)."""
-        _, _, tangent_x, tangent_y = self.pose(s)
-        return tangent_x, tangent_y
-
     def pose(self, s):
         """Point [m] and unit direction of travel at arc length ``s`` [m], in one look-up.
 
@@ -91,7 +100,7 @@ class PolylinePath:
                 dx / segment_length, dy / segment_length)
 
 
-class SCurvePath:
+class SCurvePath(_Path):
     """The S-curve of the module docstring, parametrised by arc length.
 
     Parameters
@@ -136,16 +145,6 @@ class SCurvePath:
         # d/du of sin^3 cos = (pi/l) sin^2 (3 cos^2 - sin^2)
         return (_PEAK_GAIN * self.amplitude * np.pi / self.forward_length
                 * np.sin(phase) ** 2 * (3.0 * np.cos(phase) ** 2 - np.sin(phase) ** 2))
-
-    def position(self, s):
-        """Point [m] at arc length ``s`` [m] (clamped to the path)."""
-        x, y, _, _ = self.pose(s)
-        return x, y
-
-    def tangent(self, s):
-        """Unit direction of travel at arc length ``s``."""
-        _, _, tangent_x, tangent_y = self.pose(s)
-        return tangent_x, tangent_y
 
     def pose(self, s):
         """Point [m] and unit direction of travel at arc length ``s`` [m], in one look-up.
