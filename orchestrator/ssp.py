@@ -689,14 +689,16 @@ FMU_PORTS = {
     ],
 }
 
-# Instance name -> FMU model name, in stepping-tie-break order (signal flow order).
+# Instance name -> FMU model name, in stepping-tie-break order. No FMU has direct feedthrough,
+# so this is the Gauss-Seidel order: the plant steps before the controllers, which then sample
+# v_meas at the same instant as the v_ref the planner has just produced (docs/system.md).
 SONOTRACK_INSTANCES = {
     "source": "SoundSource",
     "localizer": "AcousticLocalizer",
     "planner": "CurvaturePlanner",
+    "plant": "RobotPlant",
     "controller_left": "WheelController",
     "controller_right": "WheelController",
-    "plant": "RobotPlant",
 }
 
 SONOTRACK_CONNECTIONS = [

@@ -109,7 +109,13 @@ class SonotrackSlave(Fmi2Slave):
         self._declare(Boolean, name, Fmi2Causality.input, description)
 
     def output_real(self, name, unit, description, depends_on=()):
-        """Declare a Real output; ``depends_on`` names the inputs it feeds through directly."""
+        """Declare a Real output; ``depends_on`` names the inputs it feeds through directly.
+
+        An input feeds through directly only when setting it changes what ``fmi2GetReal``
+        returns *before* the next ``fmi2DoStep``. Ports here are plain attributes written in
+        ``do_step`` (or ``exit_initialization_mode``), so no sonotrack output does: a false
+        declaration makes masters see algebraic loops that do not exist.
+        """
         self._declare(Real, name, Fmi2Causality.output, description, unit, depends_on)
 
     def output_integer(self, name, description, depends_on=()):
@@ -259,7 +265,8 @@ class SonotrackSlave(Fmi2Slave):
                 raise ValueError(f"output {variable.name!r} depends on unknown ports {unknown}")
             direct = sorted(index[name] for name in inputs)
             SubElement(outputs_node, "Unknown", _unknown(index[variable.name], direct))
-            # At initialisation an output may depend on its direct inputs and on any parameter.
+            # At initialisation an output depends on its direct inputs (no slave reads an input
+            # in exit_initialization_mode) and, conservatively, on every parameter.
             at_init = sorted(set(direct) | {index[name] for name in parameters})
             SubElement(initial_node, "Unknown", _unknown(index[variable.name], at_init))
 

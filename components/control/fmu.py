@@ -56,13 +56,13 @@ class WheelController(SonotrackSlave):
 
         self.input_real("v_ref", "m/s", "reference rim speed of the wheel")
         self.input_real("v_meas", "m/s", "measured rim speed of the wheel (from the encoder)")
-        both = ("v_ref", "v_meas")
-        self.output_real("voltage", "V", "armature voltage command", depends_on=both)
-        self.output_real("kp", "1", "proportional gain used in the last step", depends_on=both)
-        self.output_real("kd", "1", "derivative gain used in the last step", depends_on=both)
-        self.output_real("error", "m/s", "speed error v_ref - v_meas", depends_on=both)
-        self.output_real("error_rate", "m/s2", "filtered time derivative of the error",
-                         depends_on=both)
+        # No direct feedthrough: every output is computed in do_step and held until the next
+        # one, so setting v_ref or v_meas changes no output before the next step.
+        self.output_real("voltage", "V", "armature voltage command")
+        self.output_real("kp", "1", "proportional gain used in the last step")
+        self.output_real("kd", "1", "derivative gain used in the last step")
+        self.output_real("error", "m/s", "speed error v_ref - v_meas")
+        self.output_real("error_rate", "m/s2", "filtered time derivative of the error")
         self.parameter_string("mode", "control law: fgs_pd, pid or pd")
         self.parameter_string("fuzzy_method",
                               "FGS-PD defuzzification: weighted (Eqs. 51-52) or mamdani (COG)")

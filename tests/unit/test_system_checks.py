@@ -406,8 +406,8 @@ def test_sonotrack_plant_with_feedthrough_makes_a_loop(tmp_path):
     with pytest.raises(SystemDescriptionError) as caught:
         load_system(ssd)
     assert caught.value.problems == [
-        "algebraic loop: controller_left.voltage -> plant.voltage_left -> "
-        "plant.wheel_speed_left -> controller_left.v_meas -> controller_left.voltage",
+        "algebraic loop: plant.wheel_speed_left -> controller_left.v_meas -> "
+        "controller_left.voltage -> plant.voltage_left -> plant.wheel_speed_left",
     ]
 
 

@@ -68,10 +68,10 @@ def test_committed_ssd_is_the_output_of_the_table():
 def test_committed_ssd_wires_the_design_connections():
     system = read_ssd(COMMITTED_SSD)
     assert [c.name for c in system.components] == [
-        "source", "localizer", "planner", "controller_left", "controller_right", "plant"]
+        "source", "localizer", "planner", "plant", "controller_left", "controller_right"]
     assert [c.source for c in system.components] == [
         "SoundSource.fmu", "AcousticLocalizer.fmu", "CurvaturePlanner.fmu",
-        "WheelController.fmu", "WheelController.fmu", "RobotPlant.fmu"]
+        "RobotPlant.fmu", "WheelController.fmu", "WheelController.fmu"]
     assert [str(c) for c in system.connections] == [f"{a} -> {b}"
                                                     for a, b in SONOTRACK_CONNECTIONS]
     assert len(system.connections) == 18
