@@ -67,7 +67,8 @@ def _cmd_run(args):
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
     try:
         result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
-                              fmu_dir=args.fmu_dir, record_interval=args.record_interval)
+                              fmu_dir=args.fmu_dir, record_interval=args.record_interval,
+                              fsync=args.fsync)
     except SonotrackError as exc:
         if "not found at" in str(exc):
             raise SonotrackError(f"{exc}\n  (build the FMUs first: `sonotrack build`, or "
@@ -140,6 +141,8 @@ def _parser():
     run.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
     run.add_argument("--record-interval", type=float, default=0.02,
                      help="simulated seconds between recorded rows (default 0.02)")
+    run.add_argument("--fsync", action="store_true",
+                     help="fsync results.csv once a simulated second (default: at the end)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 
@@ -182,7 +185,7 @@ def main(argv=None):
         return args.func(args)
     except SonotrackError as exc:
         print(f"sonotrack {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        return getattr(exc, "exit_status", 2)
     except KeyboardInterrupt:
         print(f"sonotrack {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -4,7 +4,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_run"]
+__all__ = ["PLOT_FILES", "plot_run"]
+
+# Every file plot_run may write: a new run removes an older run's copies before it starts.
+PLOT_FILES = ("trajectories.png", "wheel_speeds.png", "gains.png", "localizer.png")
 
 
 def _figure():
@@ -108,9 +111,15 @@ def _true_fix(data):
 
 
 def _save(fig, path):
+    import io
+
+    from orchestrator.outputs import atomic_write_bytes
+
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    encoded = io.BytesIO()
+    fig.savefig(encoded, dpi=110, format="png")
+    atomic_write_bytes(path, encoded.getvalue(), fsync=False)
     import matplotlib.pyplot as plt
 
     plt.close(fig)

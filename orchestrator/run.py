@@ -6,13 +6,12 @@ with a progress bar, streaming results to disk; if an FMU fails, the rows so far
 summary saying what failed stay on disk and :class:`SimulationError` is raised.
 """
 
-import json
 import math
 import time as wallclock
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from components.common.errors import ConfigError, SimulationError
+from components.common.errors import ConfigError, RunInterrupted, SimulationError
 
 __all__ = ["BACKENDS", "RunResult", "run_scenario", "instance_parameters"]
 
@@ -106,8 +105,15 @@ BACKENDS = ("fmi", "in-process")
 
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
-                 algorithm=None, record_interval=0.02, backend="fmi"):
+                 algorithm=None, record_interval=0.02, backend="fmi", fsync=False):
     """Run one scenario through our master on fmpy.
+
+    The results folder is checked before anything runs; an older run's files in it are
+    cleared and ``summary.json`` says ``"running"`` before the first FMU is instantiated
+    (see :mod:`orchestrator.outputs`). The summary says ``"ok"`` only once the last step is
+    done and ``results.csv`` is complete; a failure or a signal is written into it as soon as
+    it is known (``"failed"`` or ``"interrupted"`` with ``error``), and a run that is killed
+    leaves ``"running"``. SIGINT and SIGTERM stop the run after the step in progress.
 
     Parameters
     ----------
@@ -129,16 +135,28 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     backend : {"fmi", "in-process"}
         ``"fmi"`` steps the FMUs through fmpy; ``"in-process"`` steps the same slave classes
         directly in this process (no FMI), to measure what the FMI layer costs.
+    fsync : bool
+        fsync ``results.csv`` at every flush (once a simulated second), not only at the end.
 
     Returns
     -------
     RunResult
+
+    Raises
+    ------
+    ConfigError
+        Before anything is written, for a bad scenario, system or results folder.
+    SimulationError
+        If an FMU failed (the summary says ``"failed"``; rows so far are in the CSV).
+    RunInterrupted
+        If SIGINT or SIGTERM stopped the run (the summary says ``"interrupted"``).
     """
     from orchestrator.fmu import FmuInstance
     from orchestrator.master import InstanceSpec, Link, Master
-    from orchestrator.metrics import tracking_summary
-    from orchestrator.recorder import Recorder
+    from orchestrator.outputs import RunFolder
+    from orchestrator.plots import PLOT_FILES
     from orchestrator.scenario import load_scenario
+    from orchestrator.stopping import StopSignals
     from orchestrator.system import load_system
 
     if not hasattr(scenario, "stop_time"):
@@ -150,6 +168,8 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     order = system.stepping_order()
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
+    folder = RunFolder(out_dir, own_files=PLOT_FILES)
+    folder.check()
     if backend == "fmi":
         handles = {name: FmuInstance(system.component(name).fmu_path, name) for name in order}
     else:
@@ -162,75 +182,133 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     master = Master(specs, links, scenario.base_step, algorithm or scenario.master,
                     observed=columns)
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    results_csv = out_dir / "results.csv"
-    summary_json = out_dir / "summary.json"
     record_every = max(1, int(round(record_interval / scenario.base_step)))
     # scenarios start at t = 0 (the schema has no start time); time is t0 + k * base_step
     start_time = 0.0
     steps_total = scenario.step_count
-
-    master.initialize(start_time=start_time, stop_time=scenario.stop_time)
-    read_row = _ColumnReader(master, system, columns)
-    bar = _progress(steps_total, scenario, progress)
-    recorder = Recorder(results_csv, columns)
-    recorder.record(start_time, read_row())
-    error = None
-    started = wallclock.perf_counter()
-    try:
-        bar_every = max(1, steps_total // 200)
-
-        def on_step(k, t):
-            if k % record_every == 0:
-                recorder.record(t, read_row())
-            if bar is not None and k % bar_every == 0:
-                bar.update(bar_every)
-
-        master.run(start_time + steps_total * scenario.base_step, on_step)
-    except SimulationError as exc:
-        error = str(exc)
-    finally:
-        wall_time = wallclock.perf_counter() - started
-        recorder.close()
-        master.terminate()
-        if bar is not None:
-            bar.close()
-
-    data = recorder.as_arrays()
-    sim_time = master.steps_done * scenario.base_step
     summary = {
         "scenario": getattr(scenario, "name", ""),
-        "status": "ok" if error is None else "failed",
-        "sim_time_s": sim_time,
-        "wall_time_s": wall_time,
-        "realtime_factor": sim_time / wall_time if wall_time > 0 else float("inf"),
-        "steps": master.steps_done,
+        "status": "running",
+        "sim_time_s": 0.0,
+        "stop_time_s": scenario.stop_time,
+        "steps": 0,
         "master": master.algorithm,
         "base_step_s": scenario.base_step,
         "seed": scenario.seed,
     }
-    if error is not None:
-        summary["error"] = error
-    if all(c in data for c in ("plant.x", "plant.y", "source.x", "source.y")) and \
-            len(data["time"]) > 1:
+    folder.start(summary)
+
+    def settle(status, error):
+        """Write what is known the moment the run's fate is known."""
+        summary.update(status=status, sim_time_s=master.steps_done * scenario.base_step,
+                       steps=master.steps_done, error=error)
+        folder.write_summary(summary)
+
+    error = None
+    recorder = None
+    bar = None
+    started = wallclock.perf_counter()
+    with StopSignals() as stop:
+        try:
+            master.initialize(start_time=start_time, stop_time=scenario.stop_time)
+            read_row = _ColumnReader(master, system, columns)
+            bar = _progress(steps_total, scenario, progress)
+            recorder = _open_recorder(folder.results_csv, columns, fsync)
+            recorder.record(start_time, read_row())
+            bar_every = max(1, steps_total // 200)
+
+            def on_step(k, t):
+                if k % record_every == 0:
+                    recorder.record(t, read_row())
+                if bar is not None and k % bar_every == 0:
+                    bar.update(bar_every)
+                if stop.received is not None:
+                    raise _Stop
+
+            if stop.received is None:
+                master.run(start_time + steps_total * scenario.base_step, on_step)
+            if stop.received is not None:
+                raise _Stop
+            recorder.close()  # fsync'ed and complete before the summary may say ok
+        except SimulationError as exc:
+            error = str(exc)
+            settle("failed", error)
+        except _Stop:
+            error = (f"interrupted by {stop.name} at t = "
+                     f"{master.steps_done * scenario.base_step:.6g} s")
+            settle("interrupted", error)
+        except BaseException as exc:
+            # anything else (a full disk, a bug): say so in the summary, then let it go up
+            try:
+                settle("failed", f"{type(exc).__name__}: {exc}")
+            finally:
+                _close_quietly(recorder, master, bar)
+            raise
+        finally:
+            wall_time = wallclock.perf_counter() - started
+        _close_quietly(recorder, master, bar)
+
+    sim_time = master.steps_done * scenario.base_step
+    summary.update({
+        "status": "ok" if error is None else summary["status"],
+        "sim_time_s": sim_time,
+        "wall_time_s": wall_time,
+        "realtime_factor": sim_time / wall_time if wall_time > 0 else float("inf"),
+        "steps": master.steps_done,
+    })
+    if error is None:
+        summary.pop("error", None)
+    trace_columns = ("plant.x", "plant.y", "source.x", "source.y")
+    if recorder is not None and recorder.rows > 1 and all(c in columns for c in trace_columns):
+        from orchestrator.metrics import tracking_summary_from_csv
+
         stop_distance = float(parameters.get("planner", {}).get(
             "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
         summary["stop_distance_m"] = stop_distance
-        summary.update(tracking_summary(
-            data["time"],
-            list(zip(data["plant.x"], data["plant.y"])),
-            list(zip(data["source.x"], data["source.y"])), stop_distance))
-    summary_json.write_text(json.dumps(summary, indent=2) + "\n")
+        summary.update(tracking_summary_from_csv(folder.results_csv, stop_distance))
+    folder.write_summary(summary)
     written = []
-    if plots and len(data["time"]) > 1:
+    interrupted = summary["status"] == "interrupted"
+    if plots and not interrupted and recorder is not None and recorder.rows > 1:
         from orchestrator.plots import plot_run
+        from orchestrator.results import read_results
 
-        written = plot_run(data, out_dir)
-    result = RunResult(summary, out_dir, results_csv, summary_json, written)
+        data = read_results(folder.results_csv, max_rows=_PLOT_ROWS)
+        written = plot_run(data, folder.path)
+    result = RunResult(summary, folder.path, folder.results_csv, folder.summary_json, written)
+    if interrupted:
+        raise RunInterrupted(f"{error}; results so far in {folder.results_csv} (summary "
+                             f"status: interrupted)", stop.received)
     if error is not None:
-        raise SimulationError(f"{error} (results so far in {results_csv})")
+        raise SimulationError(f"{error} (results so far in {folder.results_csv})")
     return result
+
+
+# Plots read results.csv thinned to this many rows: a line of 20,000 points is finer than
+# the figure's pixels, and the memory a plot takes no longer grows with the run.
+_PLOT_ROWS = 20000
+
+
+class _Stop(Exception):
+    """Raised from the step callback when a stop signal has been received."""
+
+
+def _open_recorder(path, columns, fsync):
+    from orchestrator.recorder import Recorder
+
+    return Recorder(path, columns, fsync=fsync)
+
+
+def _close_quietly(recorder, master, bar):
+    """Close the CSV, free the FMUs and the progress bar; a failure here must not hide the
+    run's own error (the CSV is closed first: it is what the user keeps)."""
+    for close in (getattr(recorder, "close", None), master.terminate,
+                  getattr(bar, "close", None)):
+        if close is not None:
+            try:
+                close()
+            except Exception:
+                pass
 
 
 def _start_value(system, instance, name, default):

@@ -11,6 +11,7 @@ __all__ = [
     "ConfigError",
     "BuildError",
     "SimulationError",
+    "RunInterrupted",
 ]
 
 
@@ -36,3 +37,17 @@ class BuildError(SonotrackError, RuntimeError):
 
 class SimulationError(SonotrackError, RuntimeError):
     """A co-simulation stopped because an FMU reported an error or discard."""
+
+
+class RunInterrupted(SonotrackError, RuntimeError):
+    """A run was stopped by a signal (SIGINT, SIGTERM) at a step boundary.
+
+    Attributes
+    ----------
+    exit_status : int
+        What the command line exits with: 128 + the signal number, as a shell reports it.
+    """
+
+    def __init__(self, message, signal_number=2):
+        super().__init__(message)
+        self.exit_status = 128 + int(signal_number)

@@ -1,0 +1,184 @@
+"""A run's output folder: atomic writes, the run's own files, and a status saying if it finished.
+
+A run folder holds ``summary.json``, ``results.csv`` and the PNG plots. ``summary.json`` is the
+marker of a finished run. Its ``status`` is
+
+- ``"running"`` from the moment a run starts writing into the folder (a run that was killed,
+  e.g. by SIGKILL or a power cut, keeps saying so);
+- ``"ok"`` only once the last step is done and ``results.csv`` is complete and on disk;
+- ``"failed"`` or ``"interrupted"``, with the reason in ``error``, as soon as that is known.
+
+When a run starts in a folder that holds an older run, the order of its first writes is chosen
+so that a kill at any instant never leaves an older summary beside newer results:
+
+1. the old ``summary.json`` is unlinked (one system call: it is there or it is gone);
+2. the run's own files (``results.csv``, the plots, leftover temporary files) are removed;
+3. ``summary.json`` is written with status ``running``.
+
+Every file but the streamed ``results.csv`` is written whole to a temporary name in the same
+folder, flushed (and fsync'ed) and renamed over its target (:func:`atomic_write_bytes`), so a
+reader sees either the old content or the new one, never a truncated file.
+"""
+
+import contextlib
+import json
+import os
+from pathlib import Path
+
+from components.common.errors import ConfigError
+
+__all__ = [
+    "RESULTS_NAME",
+    "STATUSES",
+    "SUMMARY_NAME",
+    "RunFolder",
+    "atomic_write_bytes",
+    "atomic_write_json",
+    "atomic_write_text",
+    "read_summary",
+]
+
+SUMMARY_NAME = "summary.json"
+RESULTS_NAME = "results.csv"
+STATUSES = ("running", "ok", "failed", "interrupted")
+# Temporary files are hidden and carry the writer's pid, so two writers never share one.
+_TEMP_PREFIX = "."
+_TEMP_SUFFIX = ".partial"
+
+
+def _temporary_name(path):
+    return path.with_name(f"{_TEMP_PREFIX}{path.name}.{os.getpid()}{_TEMP_SUFFIX}")
+
+
+def _fsync_directory(directory):
+    """Make a rename in ``directory`` durable (where the platform allows opening a folder)."""
+    try:
+        descriptor = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(descriptor)
+    except OSError:
+        pass
+    finally:
+        os.close(descriptor)
+
+
+def atomic_write_bytes(path, data, fsync=True):
+    """Write ``data`` to ``path`` so that readers see the old file or the new one, never half.
+
+    The bytes go to a temporary file in the same folder, which is flushed, fsync'ed and renamed
+    over ``path`` with :func:`os.replace` (atomic on POSIX and Windows within one file system).
+
+    Parameters
+    ----------
+    path : path-like
+        The target file; its folder must exist.
+    data : bytes
+        The whole new content.
+    fsync : bool
+        Also fsync the file and its folder, so the new content survives a power cut, not only
+        a killed process.
+    """
+    path = Path(path)
+    temporary = _temporary_name(path)
+    try:
+        with open(temporary, "wb") as stream:
+            stream.write(data)
+            stream.flush()
+            if fsync:
+                os.fsync(stream.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        raise
+    if fsync:
+        _fsync_directory(path.parent)
+
+
+def atomic_write_text(path, text, fsync=True):
+    """Write ``text`` (UTF-8) atomically; see :func:`atomic_write_bytes`."""
+    atomic_write_bytes(path, text.encode("utf-8"), fsync=fsync)
+
+
+def atomic_write_json(path, data, fsync=True):
+    """Write ``data`` as indented JSON atomically; see :func:`atomic_write_bytes`."""
+    atomic_write_text(path, json.dumps(data, indent=2) + "\n", fsync=fsync)
+
+
+def read_summary(run_dir):
+    """Return the ``summary.json`` of a run folder as a dict, or None if there is none.
+
+    A summary that cannot be parsed (not written by this module: atomic writes never leave
+    one) counts as none. Whether the run finished is ``summary["status"] == "ok"``.
+    """
+    path = Path(run_dir) / SUMMARY_NAME
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+class RunFolder:
+    """The output folder of one run.
+
+    Parameters
+    ----------
+    path : path-like
+        The folder (created if missing).
+    own_files : iterable of str
+        Names of the files a run writes besides ``summary.json`` and ``results.csv`` (the
+        plots); an older run's copies are removed when this run starts.
+    """
+
+    def __init__(self, path, own_files=()):
+        self.path = Path(path)
+        self.summary_json = self.path / SUMMARY_NAME
+        self.results_csv = self.path / RESULTS_NAME
+        self.own_files = tuple(own_files)
+
+    def check(self):
+        """Create the folder and make sure a file can be written in it.
+
+        Raises
+        ------
+        ConfigError
+            Naming the folder and why it cannot hold results (a file is in the way, no
+            permission, a read-only or special file system such as /proc).
+        """
+        if self.path.exists() and not self.path.is_dir():
+            raise ConfigError(f"results folder {self.path}: is a file, not a folder; "
+                              f"choose another --out")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            probe = _temporary_name(self.path / ".write-probe")
+            with open(probe, "wb") as stream:
+                stream.write(b"probe")
+            probe.unlink()
+        except OSError as error:
+            reason = error.strerror or type(error).__name__
+            raise ConfigError(f"results folder {self.path}: cannot write there ({reason}); "
+                              f"choose another --out") from None
+
+    def start(self, summary):
+        """Clear an older run's files and write ``summary`` with status ``running``.
+
+        See the module docstring for why the steps come in this order.
+        """
+        with contextlib.suppress(FileNotFoundError):
+            self.summary_json.unlink()
+        stale = [self.results_csv] + [self.path / name for name in self.own_files]
+        stale += [p for p in self.path.glob(f"{_TEMP_PREFIX}*{_TEMP_SUFFIX}") if p.is_file()]
+        for path in stale:
+            with contextlib.suppress(FileNotFoundError):
+                path.unlink()
+        self.write_summary({**summary, "status": "running"})
+
+    def write_summary(self, summary):
+        """Write ``summary`` atomically; its ``status`` must be one of :data:`STATUSES`."""
+        if summary.get("status") not in STATUSES:
+            raise ValueError(f"summary status {summary.get('status')!r} is not one of "
+                             f"{', '.join(STATUSES)}")
+        atomic_write_json(self.summary_json, summary)

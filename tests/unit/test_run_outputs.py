@@ -1,0 +1,204 @@
+"""Run outputs: atomic writes, the run folder's start order, the results reader, streaming
+figures, and a recorder that keeps no rows."""
+
+import json
+import os
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from components.common.errors import ConfigError
+from orchestrator import outputs
+from orchestrator.metrics import tracking_summary, tracking_summary_from_csv
+from orchestrator.outputs import RunFolder, atomic_write_bytes, atomic_write_json, read_summary
+from orchestrator.recorder import Recorder
+from orchestrator.results import count_rows, iter_result_chunks, read_results
+
+
+# ----- atomic writes ------------------------------------------------------------------------
+
+def test_atomic_write_replaces_whole_file_and_leaves_no_temporary(tmp_path):
+    target = tmp_path / "summary.json"
+    target.write_text("old content that is longer than the new one\n")
+    atomic_write_json(target, {"status": "ok", "value": 1.5})
+    assert json.loads(target.read_text()) == {"status": "ok", "value": 1.5}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
+
+
+def test_atomic_write_failure_keeps_the_old_file(tmp_path, monkeypatch):
+    """A writer that dies half-way (here: the rename fails) leaves the old file whole."""
+    target = tmp_path / "summary.json"
+    target.write_text('{"status": "ok"}\n')
+
+    def broken_replace(source, destination):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(outputs.os, "replace", broken_replace)
+    with pytest.raises(OSError):
+        atomic_write_bytes(target, b'{"status": "runn')
+    assert json.loads(target.read_text()) == {"status": "ok"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
+
+
+def test_atomic_write_goes_through_a_rename(tmp_path, monkeypatch):
+    """The target never holds partial bytes: the only write to it is os.replace."""
+    calls = []
+    original = os.replace
+    monkeypatch.setattr(outputs.os, "replace",
+                        lambda a, b: (calls.append((str(a), str(b))), original(a, b)))
+    target = tmp_path / "table.csv"
+    atomic_write_bytes(target, b"a,b\n1,2\n")
+    assert len(calls) == 1 and calls[0][1] == str(target) and calls[0][0] != str(target)
+    assert target.read_bytes() == b"a,b\n1,2\n"
+
+
+# ----- the run folder ------------------------------------------------------------------------
+
+def test_run_folder_start_clears_an_older_run_and_says_running(tmp_path):
+    folder = RunFolder(tmp_path, own_files=("trajectories.png",))
+    (tmp_path / "summary.json").write_text('{"status": "ok"}')
+    (tmp_path / "results.csv").write_text("time\n0.0\n")
+    (tmp_path / "trajectories.png").write_bytes(b"png")
+    (tmp_path / ".summary.json.999.partial").write_text("{")
+    (tmp_path / "notes.txt").write_text("the user's own file")
+    folder.check()
+    folder.start({"scenario": "x"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "summary.json"]
+    assert read_summary(tmp_path) == {"scenario": "x", "status": "running"}
+
+
+def test_run_folder_start_unlinks_the_old_summary_first(tmp_path, monkeypatch):
+    """Killed between any two of its steps, start() never leaves an ok summary beside a
+    half-cleared folder: the old summary goes first."""
+    folder = RunFolder(tmp_path, own_files=("trajectories.png",))
+    (tmp_path / "summary.json").write_text('{"status": "ok"}')
+    (tmp_path / "results.csv").write_text("time\n0.0\n")
+    (tmp_path / "trajectories.png").write_bytes(b"png")
+    seen = []
+    original = type(tmp_path).unlink
+
+    def unlink(path, missing_ok=False):
+        seen.append((path.name, read_summary(tmp_path)))
+        return original(path, missing_ok=missing_ok)
+
+    monkeypatch.setattr(type(tmp_path), "unlink", unlink)
+    folder.start({})
+    assert seen[0] == ("summary.json", {"status": "ok"})
+    assert all(summary is None for name, summary in seen[1:])
+
+
+def test_run_folder_refuses_a_file_and_an_unwritable_place(tmp_path):
+    a_file = tmp_path / "results"
+    a_file.write_text("x")
+    with pytest.raises(ConfigError, match="is a file, not a folder"):
+        RunFolder(a_file).check()
+    if os.path.isdir("/proc/self"):
+        with pytest.raises(ConfigError, match="cannot write there"):
+            RunFolder("/proc/self/sonotrack-run").check()
+
+
+def test_summary_status_must_be_known(tmp_path):
+    with pytest.raises(ValueError, match="not one of"):
+        RunFolder(tmp_path).write_summary({"status": "done"})
+
+
+# ----- recorder and reader ----------------------------------------------------------------
+
+def test_recorder_keeps_no_rows(tmp_path):
+    """Memory of a recorder does not grow with the rows it writes (traced allocations after
+    50,000 rows of 30 columns stay below 1 MB; keeping them would take over 40 MB)."""
+    columns = [f"x.c{i}" for i in range(30)]
+    row = [0.1 * i for i in range(30)]
+    recorder = Recorder(tmp_path / "results.csv", columns)
+    tracemalloc.start()
+    try:
+        for k in range(50_000):
+            recorder.record(k * 0.01, row)
+        current, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+        recorder.close()
+    assert peak < 1_000_000, peak
+    assert count_rows(tmp_path / "results.csv") == 50_000
+    assert not [name for name, value in vars(recorder).items()
+                if isinstance(value, (list, dict, np.ndarray)) and name != "columns"]
+
+
+def test_recorder_rows_read_back_exactly(tmp_path):
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=(257, 3)) * 10.0 ** rng.integers(-300, 300, size=(257, 3))
+    with Recorder(tmp_path / "r.csv", ["a.x", "a.y", "b.n"]) as recorder:
+        for k, row in enumerate(values):
+            recorder.record(k * 0.02, [row[0], row[1], int(k)])
+    for chunk_rows in (1, 10, 1000):
+        data = read_results(tmp_path / "r.csv", chunk_rows=chunk_rows)
+        np.testing.assert_array_equal(data["a.x"], values[:, 0])
+        np.testing.assert_array_equal(data["a.y"], values[:, 1])
+        np.testing.assert_array_equal(data["b.n"], np.arange(257))
+        np.testing.assert_array_equal(data["time"], np.arange(257) * 0.02)
+
+
+def test_reader_skips_a_row_cut_short_by_a_kill(tmp_path):
+    path = tmp_path / "results.csv"
+    path.write_text("time,a.x\n0.0,1.0\n0.02,2.0\n0.04,3.")
+    assert count_rows(path) == 2
+    assert list(read_results(path)["a.x"]) == [1.0, 2.0]
+    assert sum(len(c["time"]) for c in iter_result_chunks(path, chunk_rows=1)) == 2
+
+
+def test_reader_thins_to_max_rows_and_keeps_the_last(tmp_path):
+    path = tmp_path / "results.csv"
+    path.write_text("time\n" + "".join(f"{k}.0\n" for k in range(1001)))
+    data = read_results(path, max_rows=100, chunk_rows=37)
+    expected = list(range(0, 1001, 11)) + [1000]
+    assert list(data["time"]) == expected
+
+
+def test_reader_names_a_missing_column(tmp_path):
+    path = tmp_path / "results.csv"
+    path.write_text("time,a.x\n0.0,1.0\n")
+    with pytest.raises(ConfigError, match="no column b.y"):
+        read_results(path, ["b.y"])
+
+
+# ----- figures from the file --------------------------------------------------------------
+
+def _write_trace(path, robot, source):
+    with Recorder(path, ["plant.x", "plant.y", "source.x", "source.y"]) as recorder:
+        for k, (r, s) in enumerate(zip(robot, source)):
+            recorder.record(k * 0.02, [r[0], r[1], s[0], s[1]])
+
+
+def test_streaming_figures_equal_the_whole_array_figures(tmp_path):
+    """Chunked two-pass figures are bit-identical to the in-memory ones, for any chunk size,
+    on a run long enough to be thinned on both paths (12,000 rows)."""
+    rng = np.random.default_rng(7)
+    n = 12_000
+    t = np.arange(n) * 0.02
+    source = np.column_stack([0.5 * np.sin(t / 20.0), 2.0 + 0.05 * t])
+    robot = source - np.column_stack([np.zeros(n), np.full(n, 0.5)])
+    robot += rng.normal(scale=0.01, size=robot.shape)
+    robot[:40] = 0.0  # standing still at first
+    _write_trace(tmp_path / "r.csv", robot, source)
+    expected = tracking_summary(t, robot, source, 0.5)
+    for chunk_rows in (1, 333, 4096, 100_000):
+        assert tracking_summary_from_csv(tmp_path / "r.csv", 0.5, chunk_rows) == expected
+
+
+def test_streaming_figures_against_geometry(tmp_path):
+    """A robot 0.1 m beside a straight source path, 1 m behind the source: path RMS 0.1 m."""
+    n = 5001
+    y = np.linspace(0.0, 10.0, n)
+    source = np.column_stack([np.zeros(n), y + 2.0])
+    robot = np.column_stack([np.full(n, 0.1), y + 1.0])
+    # the start lies on the source's line, so the reference path (start, then the source's
+    # path) is the line x = 0 and every later robot point is 0.1 m from it
+    robot[0] = (0.0, -5.0)
+    _write_trace(tmp_path / "r.csv", robot, source)
+    figures = tracking_summary_from_csv(tmp_path / "r.csv", 0.5, chunk_rows=512)
+    assert figures["path_rmse_m"] == pytest.approx(0.1, abs=1e-12)
+    assert figures["path_rmse_m"] == tracking_summary(None, robot, source, 0.5)["path_rmse_m"]
+    assert figures["final_distance_to_source_m"] == pytest.approx(np.hypot(0.1, 1.0), 1e-12)
+    assert figures["min_distance_to_source_m"] == pytest.approx(np.hypot(0.1, 1.0), 1e-12)
+    assert figures["final_position_error_m"] == pytest.approx(np.hypot(0.1, 1.0) - 0.5, 1e-12)
