@@ -6,9 +6,22 @@ STAMP := $(VENV)/.installed
 FMU_DIR := fmus
 SCENARIO ?= scenarios/s_curve.toml
 
-.PHONY: install fmus demo test test-unit benchmarks clean chromium
+# sonotrack's FMI 2.0 binary (linux64), compiled against the FMI headers fmpy ships.
+FMI_BINARY := orchestrator/fmi_binary/linux64/sonotrack_fmi2.so
+FMI_SOURCE := orchestrator/fmi_binary/sonotrack_fmi2.c
+FMI_CC ?= gcc
+
+.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary
 
 install: $(STAMP)
+
+fmi-binary: $(FMI_BINARY)
+
+$(FMI_BINARY): $(FMI_SOURCE) $(STAMP)
+	mkdir -p $(dir $@)
+	$(FMI_CC) -std=c11 -O2 -fPIC -shared -Wall -Wextra -Werror -fvisibility=hidden \
+		-I"$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" \
+		-o $@ $(FMI_SOURCE) -ldl -lpthread
 
 # constraints.txt pins every package to the versions the project was tested with.
 $(STAMP): pyproject.toml constraints.txt
@@ -17,7 +30,7 @@ $(STAMP): pyproject.toml constraints.txt
 	$(BIN)/python -m pip install --quiet -c constraints.txt -e ".[test]"
 	touch $(STAMP)
 
-fmus: $(STAMP)
+fmus: $(STAMP) $(FMI_BINARY)
 	$(BIN)/sonotrack build --out $(FMU_DIR)
 
 demo: fmus
@@ -36,14 +49,14 @@ chromium:
 	    >/dev/null 2>&1)) || echo "chromium: apt-get install failed; browser checks will skip"; \
 	else echo "chromium: not root or no apt-get; browser checks will skip"; fi
 
-test: $(STAMP) chromium
+test: $(STAMP) chromium $(FMI_BINARY)
 	$(BIN)/python -m pytest -q
 
-test-unit: $(STAMP) chromium
+test-unit: $(STAMP) chromium $(FMI_BINARY)
 	$(BIN)/python -m pytest -q -m "not integration"
 
 benchmarks: fmus
 	for script in benchmarks/[!_]*.py; do $(BIN)/python $$script || exit 1; done
 
 clean:
-	rm -rf $(VENV) $(FMU_DIR)/*.fmu $(FMU_DIR)/*.ssp runs .pytest_cache
+	rm -rf $(VENV) $(FMI_BINARY) $(FMU_DIR)/*.fmu $(FMU_DIR)/*.ssp runs .pytest_cache

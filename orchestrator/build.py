@@ -2,13 +2,14 @@
 
 Each FMU is built by pythonfmu 0.7.0 from an entry script and a private copy of the cores it
 needs (``components/common`` plus the slave's sub-package) under a package name unique to that
-FMU (``_sonotrack_<name>``). A private name matters: pythonfmu FMUs share one Python
-interpreter in the host, so two FMUs bundling a package of the same name would see only the
-first one imported. The entry script is the slave module ``components/<part>/fmu.py`` itself,
+FMU and to its code (``_sonotrack_<name>_<tag>``, the tag a hash of the bundled sources). A
+private name matters: the FMUs share one Python interpreter in the host, so two FMUs (or two
+builds of one FMU) bundling a package of the same name would see only the first one imported. The entry script is the slave module ``components/<part>/fmu.py`` itself,
 its relative imports rewritten to the private package: pythonfmu 0.7.0's binary must find the
 slave class *defined* in the entry module (a class merely imported there instantiates once and
 then corrupts the interpreter on the second instance, as seen with two WheelControllers). The model description comes out compliant because every slave
 derives from :class:`components.common.slave.SonotrackSlave`; :func:`build_fmu` checks that.
+Finally the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.fmi_binary`).
 """
 
 import importlib
@@ -21,6 +22,7 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from components.common.errors import BuildError
+from orchestrator.fmi_binary import build_tag, install_binary
 
 __all__ = [
     "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "entry_script", "private_package_name",
@@ -43,9 +45,13 @@ _STATE_OPTIONS = {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True}
 _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "fmu_*.py.bak")
 
 
-def private_package_name(name):
-    """Return the package name under which the FMU ``name`` carries its cores."""
-    return f"_sonotrack_{name.lower()}"
+def private_package_name(name, tag):
+    """Return the package name under which the FMU ``name`` carries its cores.
+
+    ``tag`` identifies the build's code (:func:`orchestrator.fmi_binary.build_tag`): two builds
+    of one model with different code never share a module in a host's ``sys.modules``.
+    """
+    return f"_sonotrack_{name.lower()}_{tag}"
 
 
 def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
@@ -79,7 +85,8 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
         raise BuildError(f"FMU {name}: slave module {slave_file} does not exist")
     dest_dir = Path(dest_dir)
     dest_dir.mkdir(parents=True, exist_ok=True)
-    private = private_package_name(name)
+    private = private_package_name(
+        name, build_tag(name, [components_dir / "common", components_dir / subpackage]))
     with tempfile.TemporaryDirectory(prefix="sonotrack_build_") as stage:
         stage = Path(stage)
         package_dir = stage / private
@@ -103,6 +110,7 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
                 del sys.modules[module]
             importlib.invalidate_caches()
     _check_built(Path(fmu_path), name)
+    install_binary(fmu_path, private, name, name)
     return Path(fmu_path)
 
 

@@ -70,6 +70,7 @@ class FmuInstance:
         self._callbacks = self._make_callbacks()
         self._instantiated = False
         self._fatal = False
+        self._can_terminate = False  # FMI 2.0: only from stepComplete or stepFailed
         self._do_step = self._raw("fmi2DoStep")
 
     # ----- life cycle ------------------------------------------------------------------------
@@ -111,6 +112,7 @@ class FmuInstance:
             if parameters:
                 self.set_values(parameters)
             self._slave.exitInitializationMode()
+            self._can_terminate = True
         except Exception as exc:
             self._note_failure(exc)
             raise
@@ -123,6 +125,8 @@ class FmuInstance:
         """
         if getattr(exc, "status", None) == 4:
             self._fatal = True
+        if getattr(exc, "status", 3) >= 3:
+            self._can_terminate = False
 
     def terminate(self):
         """Terminate and free the instance (safe to call twice).
@@ -134,7 +138,8 @@ class FmuInstance:
         if self._instantiated and not self._fatal:
             self._instantiated = False
             try:
-                self._slave.terminate()
+                if self._can_terminate:  # after fmi2Error an instance is only freed
+                    self._slave.terminate()
             finally:
                 self._slave.fmi2FreeInstance(self._slave.component)
         self._instantiated = False
@@ -185,6 +190,8 @@ class FmuInstance:
 
             if status == 4:
                 self._fatal = True
+            if status >= 3:
+                self._can_terminate = False
             raise FMICallException(function=function, status=status)
 
     def port_group(self, type_name, names):

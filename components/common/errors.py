@@ -12,6 +12,7 @@ __all__ = [
     "BuildError",
     "SimulationError",
     "RunInterrupted",
+    "StepRejectedError",
 ]
 
 
@@ -51,3 +52,13 @@ class RunInterrupted(SonotrackError, RuntimeError):
     def __init__(self, message, signal_number=2):
         super().__init__(message)
         self.exit_status = 128 + int(signal_number)
+
+
+class StepRejectedError(SonotrackError, RuntimeError):
+    """A slave refuses one communication step; the host may retry it (FMI ``fmi2Discard``).
+
+    Raised from ``do_step`` when the step cannot be taken as asked but the instance is intact
+    (for example a step size the model cannot integrate). sonotrack's FMU binary maps it to
+    ``fmi2Discard`` and logs the message; every other :class:`SonotrackError` gives
+    ``fmi2Error`` (docs/fmi_binary.md).
+    """

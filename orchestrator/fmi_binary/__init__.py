@@ -1,0 +1,142 @@
+"""sonotrack's own FMI 2.0 binary (linux64) and how ``sonotrack build`` puts it into an FMU.
+
+pythonfmu builds the FMU (model description, resources with the slave's Python code); then
+:func:`install_binary` replaces pythonfmu's ``binaries/linux64/<model>.so`` with the library
+compiled by ``make`` from ``sonotrack_fmi2.c`` and writes ``resources/sonotrack_binding.txt``,
+the table that library reads at ``fmi2Instantiate``: the GUID, where the slave's code lives, the
+libpython and Python executable of the build (used only by hosts that run no Python) and every
+variable's value reference, type, causality, variability and initial. The win64 binary stays
+pythonfmu's. docs/fmi_binary.md describes the binary's contract.
+"""
+
+import hashlib
+import os
+import sys
+import sysconfig
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree
+
+from components.common.errors import BuildError
+
+__all__ = ["LIBRARY", "SOURCE", "BINDING_FILE", "build_tag", "install_binary", "binding_table"]
+
+HERE = Path(__file__).resolve().parent
+SOURCE = HERE / "sonotrack_fmi2.c"
+LIBRARY = HERE / "linux64" / "sonotrack_fmi2.so"
+BINDING_FILE = "resources/sonotrack_binding.txt"
+
+_IGNORED_PARTS = {"__pycache__"}
+
+
+def build_tag(name, sources):
+    """Return 12 hex digits that identify the code an FMU carries.
+
+    The private package of the FMU is named after this tag, so two builds of one model whose
+    code differs in any byte load under different module names in one process, and two builds
+    of identical code may share them.
+
+    Parameters
+    ----------
+    name : str
+        The model name.
+    sources : iterable of path-like
+        Files and folders whose content goes into the FMU (folders are walked; ``__pycache__``
+        and ``*.pyc`` are skipped).
+    """
+    digest = hashlib.sha256(name.encode())
+    for source in sources:
+        source = Path(source)
+        files = sorted(p for p in source.rglob("*") if p.is_file()) if source.is_dir() else [source]
+        for path in files:
+            relative = path.relative_to(source.parent)
+            if _IGNORED_PARTS & set(relative.parts) or path.suffix == ".pyc":
+                continue
+            digest.update(str(relative).encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:12]
+
+
+def _python_facts():
+    """libpython, the Python executable (its venv gives numpy) and the version of this build."""
+    library = Path(sysconfig.get_config_var("LIBDIR") or "",
+                   sysconfig.get_config_var("INSTSONAME") or "")
+    if not sysconfig.get_config_var("Py_ENABLE_SHARED") or not library.is_file():
+        library = Path("")  # a static Python: C hosts must set SONOTRACK_LIBPYTHON
+    return str(library), sys.executable, f"{sys.version_info.major}.{sys.version_info.minor}"
+
+
+def binding_table(description_xml, package, entry, class_name):
+    """Return the text of ``resources/sonotrack_binding.txt`` for a model description.
+
+    Parameters
+    ----------
+    description_xml : bytes
+        The FMU's modelDescription.xml.
+    package, entry, class_name : str
+        The private package holding the cores, the entry module's file stem in resources/ and
+        the slave class defined there.
+    """
+    root = ElementTree.fromstring(description_xml)
+    libpython, python, version = _python_facts()
+    lines = ["# sonotrack FMI binary binding, read by binaries/linux64 at fmi2Instantiate",
+             f"guid\t{root.get('guid')}", f"libpython\t{libpython}", f"python\t{python}",
+             f"python_version\t{version}", f"package\t{package}", f"entry\t{entry}",
+             f"class\t{class_name}"]
+    for variable in root.find("ModelVariables"):
+        name = variable.get("name")
+        if "." in name or "\t" in name or not name.isidentifier():
+            raise BuildError(f"{class_name}: variable {name!r} is not a Python identifier; the "
+                             f"binary reads each port as the slave attribute of that name")
+        kind = next(child.tag for child in variable if child.tag in
+                    ("Real", "Integer", "Boolean", "String"))
+        causality = variable.get("causality", "local")
+        variability = variable.get("variability", "continuous" if kind == "Real" else "discrete")
+        lines.append("\t".join(["var", variable.get("valueReference"), kind, causality, variability,
+                                variable.get("initial", "-"), name]))
+    return "\n".join(lines) + "\n"
+
+
+def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
+    """Put sonotrack's linux64 binary and its binding table into a pythonfmu-built FMU.
+
+    Parameters
+    ----------
+    fmu_path : path-like
+        The ``.fmu`` file, rewritten in place (atomically).
+    package, entry, class_name : str
+        See :func:`binding_table`.
+    library : path-like, optional
+        The compiled binary (default: the one ``make`` builds).
+    """
+    fmu_path = Path(fmu_path)
+    library = Path(library)
+    if not library.is_file():
+        raise BuildError(f"FMI binary {library} is missing: run `make` (target {library.name})")
+    if library.stat().st_mtime < SOURCE.stat().st_mtime:
+        raise BuildError(f"FMI binary {library} is older than {SOURCE.name}: run `make`")
+    with zipfile.ZipFile(fmu_path) as archive:
+        entries = [(info, archive.read(info)) for info in archive.infolist()]
+    description = next((data for info, data in entries if info.filename == "modelDescription.xml"),
+                       None)
+    if description is None:
+        raise BuildError(f"{fmu_path}: no modelDescription.xml")
+    identifier = ElementTree.fromstring(description).find("CoSimulation").get("modelIdentifier")
+    target = f"binaries/linux64/{identifier}.so"
+    table = binding_table(description, package, entry, class_name).encode()
+    replaced = {target: library.read_bytes(), BINDING_FILE: table}
+    handle, temporary = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
+    os.close(handle)
+    try:
+        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
+            for info, data in entries:
+                if info.filename not in replaced:
+                    archive.writestr(info, data)
+            for name, data in replaced.items():
+                archive.writestr(name, data)
+        os.replace(temporary, fmu_path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return fmu_path
