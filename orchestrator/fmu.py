@@ -21,12 +21,16 @@ _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_
 
 
 def extract_once(path):
-    """Extract an FMU once per process and return (model description, unzip folder)."""
+    """Return (model description, unpacked folder) of an FMU, unpacked safely into the
+    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process."""
     import fmpy
+
+    from orchestrator.extract import extract_fmu
 
     path = Path(path).resolve()
     if path not in _EXTRACTED:
-        _EXTRACTED[path] = (fmpy.read_model_description(str(path)), fmpy.extract(str(path)))
+        unzip_dir = extract_fmu(path)
+        _EXTRACTED[path] = (fmpy.read_model_description(str(unzip_dir)), str(unzip_dir))
     return _EXTRACTED[path]
 
 

@@ -43,10 +43,19 @@ def validate_fmu(path, simulate=True):
         return report
     from fmpy.validation import validate_fmu as fmpy_validate
 
+    from components.common.errors import ConfigError
+    from orchestrator.extract import extract_fmu
+
+    try:
+        # the same checked, size-capped unpacking a run uses; nothing else runs on a refusal
+        unzip_dir = extract_fmu(path)
+    except ConfigError as error:
+        report.problems.append(f"unpacking: {error}")
+        return report
     report.problems += [f"fmpy validate: {p}" for p in fmpy_validate(str(path))]
     report.problems += [f"fmutool -check: {p}" for p in _fmutool_check(path)]
     if simulate and not report.problems:
-        report.problems += [f"fmpy simulate: {p}" for p in _short_simulation(path)]
+        report.problems += [f"fmpy simulate: {p}" for p in _short_simulation(unzip_dir)]
     return report
 
 
@@ -87,7 +96,10 @@ print(json.dumps(errors))
 
 
 def _short_simulation(path):
-    """Simulate in a child process: a crashing FMU must not take the validator down."""
+    """Simulate in a child process: a crashing FMU must not take the validator down.
+
+    ``path`` is the unpacked FMU folder, so fmpy unpacks nothing into the temporary folder.
+    """
     import json
 
     import fmpy
