@@ -11,7 +11,7 @@ FMI_BINARY := orchestrator/fmi_binary/linux64/sonotrack_fmi2.so
 FMI_SOURCE := orchestrator/fmi_binary/sonotrack_fmi2.c
 FMI_CC ?= gcc
 
-.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary
+.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary tbb
 
 install: $(STAMP)
 
@@ -49,7 +49,19 @@ chromium:
 	    >/dev/null 2>&1)) || echo "chromium: apt-get install failed; browser checks will skip"; \
 	else echo "chromium: not root or no apt-get; browser checks will skip"; fi
 
-test: $(STAMP) chromium $(FMI_BINARY)
+# ecos (the C++ engine in the ecospy wheel) needs Debian's libtbb12 to start; the ecos tests
+# (tests/integration/test_portable_ssd.py) skip, saying why, where it cannot be installed.
+tbb:
+	@if /sbin/ldconfig -p 2>/dev/null | grep -q 'libtbb\.so\.12'; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	  echo "installing Debian libtbb12 for the ecos tests"; \
+	  (DEBIAN_FRONTEND=noninteractive apt-get install -y libtbb12 >/dev/null 2>&1 || \
+	    (apt-get update >/dev/null 2>&1 && \
+	    DEBIAN_FRONTEND=noninteractive apt-get install -y libtbb12 >/dev/null 2>&1)) \
+	    || echo "libtbb12: apt-get install failed; ecos tests will skip"; \
+	else echo "libtbb12: not root or no apt-get; ecos tests will skip"; fi
+
+test: $(STAMP) chromium tbb $(FMI_BINARY)
 	$(BIN)/python -m pytest -q
 
 test-unit: $(STAMP) chromium $(FMI_BINARY)

@@ -25,7 +25,12 @@ _CHILD = textwrap.dedent('''
     job = json.loads(sys.stdin.read())
     log_output_level(CosimLogLevel.ERROR)
     started = time.perf_counter()
-    execution = CosimExecution.from_ssp_file(job["ssd"], step_size=int(round(job["step"] * 1e9)))
+    if job["step"] is None:
+        # the .ssd's osp:FixedStepAlgorithm gives the base step
+        execution = CosimExecution.from_ssp_file(job["ssd"])
+    else:
+        execution = CosimExecution.from_ssp_file(job["ssd"],
+                                                 step_size=int(round(job["step"] * 1e9)))
     reads = []
     for column in job["columns"]:
         instance, port = column.split(".", 1)
@@ -69,8 +74,11 @@ def run_libcosim_ssd(ssd_path, step, stop_time, columns, observer="last_value"):
     ----------
     ssd_path : path-like
         The system; component sources resolve relative to its folder (libcosim's rule).
-    step, stop_time : float
-        Base step and end time in s.
+    step : float or None
+        Base step in s, or None to let libcosim take it from the ``.ssd`` (its
+        ``osp:FixedStepAlgorithm`` annotation, :attr:`SystemDescription.base_step`).
+    stop_time : float
+        End time in s.
     columns : list of str
         ``"instance.port"`` Real outputs to record after every step.
     observer : {"last_value", "time_series"}
@@ -87,8 +95,16 @@ def run_libcosim_ssd(ssd_path, step, stop_time, columns, observer="last_value"):
     """
     if observer not in OBSERVERS:
         raise ConfigError(f"libcosim observer {observer!r} is not one of {', '.join(OBSERVERS)}")
+    base_step = step
+    if step is None:
+        from orchestrator.ssp import read_ssd
+
+        base_step = read_ssd(ssd_path).base_step
+        if base_step is None:
+            raise ConfigError(f"{ssd_path}: no step given and the file has no "
+                              f"osp:FixedStepAlgorithm baseStepSize in its DefaultExperiment")
     job = {"ssd": str(Path(ssd_path)), "step": step, "columns": list(columns),
-           "steps": int(round(stop_time / step)), "observer": observer}
+           "steps": int(round(stop_time / base_step)), "observer": observer}
     completed = subprocess.run([sys.executable, "-c", _CHILD], input=json.dumps(job),
                                capture_output=True, text=True)
     if completed.returncode != 0:

@@ -184,6 +184,12 @@ class SystemDescription:
         ``ssc:Unit`` definitions: unit name to its ``ssc:BaseUnit`` attributes.
     start_time, stop_time : float or None
         ``ssd:DefaultExperiment``, in s.
+    base_step : float or None
+        Base step of libcosim's fixed-step algorithm (``osp:FixedStepAlgorithm baseStepSize``
+        in the ``ssd:DefaultExperiment``), in s: with it libcosim needs no step size argument.
+    parameter_set_name : str or None
+        Name of every ``ssv:ParameterSet``. One name for all components, because ecos applies
+        exactly one named set (``--parameterSet``); ``None`` if the file binds no parameters.
     """
 
     name: str
@@ -193,6 +199,8 @@ class SystemDescription:
     units: dict[str, dict[str, float]] = field(default_factory=dict)
     start_time: float | None = None
     stop_time: float | None = None
+    base_step: float | None = None
+    parameter_set_name: str | None = "default"
 
     def component(self, name):
         """Return the component called ``name``, or None."""
@@ -380,6 +388,18 @@ def _read_step_size_hint(annotations, problems):
     return None
 
 
+def _read_base_step(annotations, problems):
+    for annotation in _children(annotations, _ssc("Annotation")):
+        if annotation.get("type") != _OSP_ANNOTATION_TYPE:
+            continue
+        algorithm = _child(annotation, f"{{{OSP_NAMESPACE}}}Algorithm")
+        fixed = (_child(algorithm, f"{{{OSP_NAMESPACE}}}FixedStepAlgorithm")
+                 if algorithm is not None else None)
+        if fixed is not None:
+            return _float_attribute(fixed, "baseStepSize", problems)
+    return None
+
+
 def _read_component(node, directory, problems):
     name = _required(node, "name", problems)
     source = _required(node, "source", problems)
@@ -511,15 +531,22 @@ def read_ssd(path):
     if units_node is not None:
         units = _read_units(units_node, problems)
 
-    start_time = stop_time = None
+    start_time = stop_time = base_step = None
     experiment = _child(root, _ssd("DefaultExperiment"))
     if experiment is not None:
         start_time = _float_attribute(experiment, "startTime", problems)
         stop_time = _float_attribute(experiment, "stopTime", problems)
+        annotations = _child(experiment, _ssd("Annotations"))
+        if annotations is not None:
+            base_step = _read_base_step(annotations, problems)
+    # Our loader applies every binding whatever its set's name; the name is kept for writing.
+    set_names = [node.get("name") for node in root.iter(_ssv("ParameterSet"))]
+    parameter_set_name = set_names[0] if set_names else None
 
     problems.raise_if_any()
     return SystemDescription(name=name, components=components, connections=connections,
-                             path=path, units=units, start_time=start_time, stop_time=stop_time)
+                             path=path, units=units, start_time=start_time, stop_time=stop_time,
+                             base_step=base_step, parameter_set_name=parameter_set_name)
 
 
 # ----- writing --------------------------------------------------------------------------------
@@ -559,8 +586,9 @@ def _build_tree(system):
             bindings = etree.SubElement(node, _ssd("ParameterBindings"))
             binding = etree.SubElement(bindings, _ssd("ParameterBinding"))
             values = etree.SubElement(binding, _ssd("ParameterValues"))
+            set_name = system.parameter_set_name or "default"
             parameter_set = etree.SubElement(values, _ssv("ParameterSet"), version="1.0",
-                                             name=f"{component.name}_parameters")
+                                             name=set_name)
             parameters = etree.SubElement(parameter_set, _ssv("Parameters"))
             for name, parameter in component.parameters.items():
                 parameter_node = etree.SubElement(parameters, _ssv("Parameter"), name=name)
@@ -587,12 +615,21 @@ def _build_tree(system):
             attributes = {k: _format_number(v) for k, v in exponents.items()
                           if k in _BASE_UNIT_ATTRIBUTES}
             etree.SubElement(unit, _ssc("BaseUnit"), attributes)
-    if system.start_time is not None or system.stop_time is not None:
+    if system.start_time is not None or system.stop_time is not None or system.base_step:
         experiment = etree.SubElement(root, _ssd("DefaultExperiment"))
         if system.start_time is not None:
             experiment.set("startTime", _format_value(float(system.start_time)))
         if system.stop_time is not None:
             experiment.set("stopTime", _format_value(float(system.stop_time)))
+        if system.base_step is not None:
+            # libcosim's fixed-step master reads its base step here (ssp_parser.cpp); without
+            # it, from_ssp_file needs a step size argument.
+            annotations = etree.SubElement(experiment, _ssd("Annotations"))
+            annotation = etree.SubElement(annotations, _ssc("Annotation"),
+                                          type=_OSP_ANNOTATION_TYPE)
+            algorithm = etree.SubElement(annotation, f"{{{OSP_NAMESPACE}}}Algorithm")
+            etree.SubElement(algorithm, f"{{{OSP_NAMESPACE}}}FixedStepAlgorithm",
+                             baseStepSize=_format_value(float(system.base_step)))
     return root
 
 
@@ -790,7 +827,9 @@ def sonotrack_system(stop_time=30.0, fmu_prefix=""):
     bases = _unit_bases()
     units = {unit: bases[unit] for unit in sorted(used_units)}
     return SystemDescription(name="sonotrack", components=components, connections=connections,
-                             units=units, start_time=0.0, stop_time=float(stop_time))
+                             units=units, start_time=0.0, stop_time=float(stop_time),
+                             base_step=min(SONOTRACK_STEP_SIZES.values()),
+                             parameter_set_name="default")
 
 
 _GENERATED_HEADER = ("Generated by orchestrator/ssp.py (sonotrack_system); regenerate with "

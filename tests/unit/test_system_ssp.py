@@ -16,9 +16,10 @@ COMMITTED_SSD = REPO / "fmus" / "SystemStructure.ssd"
 
 
 def ssp_schema():
-    import fmpy.ssp
+    """The normative SSP 1.0 SystemStructureDescription schema, as pyssp-standard ships it."""
+    import pyssp_standard
 
-    schema_dir = os.path.join(os.path.dirname(fmpy.ssp.__file__), "schema")
+    schema_dir = os.path.join(os.path.dirname(pyssp_standard.__file__), "resources")
     return etree.XMLSchema(file=os.path.join(schema_dir, "SystemStructureDescription.xsd"))
 
 
@@ -37,7 +38,7 @@ def every_feature():
         ],
         connections=[Connection("a", "x", "b", "u")],
         units={"m": {"m": 1.0}, "deg": {"rad": 1.0, "factor": 0.017453292519943295}},
-        start_time=0.0, stop_time=12.5,
+        start_time=0.0, stop_time=12.5, base_step=0.005, parameter_set_name="demo_set",
     )
 
 
@@ -167,3 +168,36 @@ def test_parameters_from_an_ssv_file(tmp_path):
     (tmp_path / "s.ssd").write_text(text, encoding="utf-8")
     assert read_ssd(tmp_path / "s.ssd").components[0].parameters == {
         "v_cruise": ParameterValue("Real", 0.3), "on": ParameterValue("Boolean", True)}
+
+
+def test_committed_ssd_is_portable():
+    """One parameter-set name (ecos applies one named set) and libcosim's base step."""
+    root = etree.parse(str(COMMITTED_SSD)).getroot()
+    namespaces = {"ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+                  "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations"}
+    names = {node.get("name") for node in root.iterfind(".//ssv:ParameterSet", namespaces)}
+    assert names == {"default"}
+    bound = {c.name for c in read_ssd(COMMITTED_SSD).components if c.parameters}
+    assert bound == {"source", "localizer"}   # path (String) and seed (Integer) both in "default"
+    fixed = root.findall(".//osp:Algorithm/osp:FixedStepAlgorithm", namespaces)
+    assert [float(node.get("baseStepSize")) for node in fixed] == [0.01]
+    system = read_ssd(COMMITTED_SSD)
+    assert system.base_step == 0.01 and system.parameter_set_name == "default"
+    # every component's step is a whole multiple of the base step (libcosim's decimation)
+    for component in system.components:
+        ratio = component.step_size_hint / system.base_step
+        assert abs(ratio - round(ratio)) < 1e-9, component.name
+
+
+@pytest.mark.parametrize("breakage", [
+    ('<ssd:DefaultExperiment startTime="0.0"', '<ssd:DefaultExperiment startTime="zero"'),
+    ('ssd:Units>', 'ssd:UnitList>'),
+    ('kind="output"', 'kind="out"'),
+], ids=["non_numeric_start_time", "misspelt_units", "unknown_connector_kind"])
+def test_schema_rejects_a_broken_ssd(tmp_path, breakage):
+    """The XSD check is not vacuous: small breakages of the committed file fail it."""
+    text = COMMITTED_SSD.read_text(encoding="utf-8")
+    assert breakage[0] in text
+    broken = tmp_path / "broken.ssd"
+    broken.write_text(text.replace(*breakage), encoding="utf-8")
+    assert not ssp_schema().validate(etree.parse(str(broken)))
