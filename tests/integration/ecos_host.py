@@ -10,8 +10,6 @@ import csv
 import os
 import shutil
 import subprocess
-import sys
-import sysconfig
 from pathlib import Path
 
 __all__ = ["ecos_binary", "ecos_environment", "run_ecos", "read_ecos_csv"]
@@ -42,15 +40,15 @@ def ecos_binary(folder):
 
 
 def ecos_environment():
-    """Environment for the ecos child process.
+    """Environment for the ecos child process: the caller's, with nothing added.
 
-    pythonfmu 0.7.0's binary finds libpython only in the host process, so a non-Python host
-    needs it preloaded, and the FMU's Python then needs this interpreter's packages (numpy).
+    sonotrack's FMI binary loads the libpython and the Python recorded at build time when the
+    host has none, so a non-Python host needs no ``LD_PRELOAD`` or ``PYTHONPATH``; both are
+    removed here so that the test cannot pass because of them.
     """
     environment = dict(os.environ)
-    library = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("LDLIBRARY")
-    environment["LD_PRELOAD"] = str(library)
-    environment["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p.endswith("site-packages"))
+    environment.pop("LD_PRELOAD", None)
+    environment.pop("PYTHONPATH", None)
     return environment
 
 
