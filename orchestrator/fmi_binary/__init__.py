@@ -20,7 +20,8 @@ from xml.etree import ElementTree
 
 from components.common.errors import BuildError
 
-__all__ = ["LIBRARY", "SOURCE", "BINDING_FILE", "build_tag", "install_binary", "binding_table"]
+__all__ = ["LIBRARY", "SOURCE", "BINDING_FILE", "build_tag", "install_binary", "binding_table",
+           "pythonfmu_binary"]
 
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / "sonotrack_fmi2.c"
@@ -108,13 +109,14 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
     package, entry, class_name : str
         See :func:`binding_table`.
     library : path-like, optional
-        The compiled binary (default: the one ``make`` builds).
+        The compiled binary (default: the one ``make`` builds; benchmarks pass
+        :func:`pythonfmu_binary` to build the same FMU with pythonfmu's).
     """
     fmu_path = Path(fmu_path)
     library = Path(library)
     if not library.is_file():
         raise BuildError(f"FMI binary {library} is missing: run `make` (target {library.name})")
-    if library.stat().st_mtime < SOURCE.stat().st_mtime:
+    if library == LIBRARY and library.stat().st_mtime < SOURCE.stat().st_mtime:
         raise BuildError(f"FMI binary {library} is older than {SOURCE.name}: run `make`")
     with zipfile.ZipFile(fmu_path) as archive:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
@@ -140,3 +142,11 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
         Path(temporary).unlink(missing_ok=True)
         raise
     return fmu_path
+
+
+def pythonfmu_binary():
+    """Path of pythonfmu's own linux64 binary (for comparisons; FMUs ship sonotrack's)."""
+    import pythonfmu
+
+    return Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64" / \
+        "libpythonfmu-export.so"
