@@ -6,6 +6,7 @@ exit non-zero.
 """
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -90,32 +91,43 @@ DEFAULT_SCENARIO = "scenarios/s_curve.toml"
 
 def _cmd_sweep(args):
     from orchestrator.scenario import load_scenario
-    from orchestrator.sweep import parse_assignment, sweep
+    from orchestrator.sweep import parse_assignment, parse_seeds, sweep
 
     scenario_path = args.scenario or DEFAULT_SCENARIO
     if not Path(scenario_path).is_file():
         raise SonotrackError(f"scenario file {scenario_path} does not exist")
-    grid = dict(parse_assignment(text) for text in args.set or [])
-    seeds = _seeds(args.seeds) if args.seeds else None
+    grid = {}
+    for text in args.set or []:
+        key, values = parse_assignment(text)
+        if key in grid:
+            raise SonotrackError(f"--set {key} is given twice; list all its values in one "
+                                 f"--set, e.g. {key}=a,b")
+        grid[key] = values
+    seeds = parse_seeds(args.seeds) if args.seeds is not None else None
     out = Path(args.out) if args.out else Path("runs") / f"sweep_{Path(scenario_path).stem}"
     result = sweep(load_scenario(scenario_path), grid, out, seeds=seeds, fmu_dir=args.fmu_dir,
-                   scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+                   scheduler=args.scheduler, workers=_workers(args.workers), progress=not args.quiet)
     failed = [row for row in result.rows if row.get("status") != "ok"]
     print(f"{len(result.rows)} runs ({result.computed} computed, {result.reused} reused), "
           f"{len(failed)} failed")
+    for row in failed[:5]:
+        print(f"  failed: {row['run_dir']}: {row.get('error', '')}", file=sys.stderr)
     print(f"table: {result.table_csv.resolve()}")
     return 1 if failed else 0
 
 
-def _seeds(text):
-    """``1,2,5`` or ``1..10`` (inclusive) into a list of ints."""
+def _workers(text):
+    """``--workers`` text into an int >= 1 (one line naming the option otherwise)."""
+    if text is None:
+        return None
     try:
-        if ".." in text:
-            first, last = text.split("..", 1)
-            return list(range(int(first), int(last) + 1))
-        return [int(v) for v in text.split(",") if v.strip()]
+        value = int(text)
     except ValueError:
-        raise SonotrackError(f"--seeds {text!r}: expected 1,2,3 or 1..10") from None
+        value = None
+    if value is None or value < 1:
+        raise SonotrackError(f"--workers {text!r}: expected a whole number of worker processes "
+                             f">= 1 (this machine has {os.cpu_count()} CPUs)")
+    return value
 
 
 def _parser():
@@ -153,8 +165,11 @@ def _parser():
     sweep.add_argument("--seeds", help="seeds, e.g. 1,2,3 or 1..10 (default: the scenario's)")
     sweep.add_argument("--out", help="sweep folder (default: runs/sweep_<scenario name>)")
     sweep.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
-    sweep.add_argument("--scheduler", help="Dask scheduler address (default: a LocalCluster)")
-    sweep.add_argument("--workers", type=int, help="local worker processes (default: CPUs)")
+    sweep.add_argument("--scheduler", metavar="tcp://HOST:8786",
+                       help="address of a Dask scheduler (default: worker processes on this "
+                            "machine)")
+    sweep.add_argument("--workers",
+                       help="worker processes on this machine, >= 1 (default: CPUs)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
 

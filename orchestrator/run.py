@@ -105,7 +105,8 @@ BACKENDS = ("fmi", "in-process")
 
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
-                 algorithm=None, record_interval=0.02, backend="fmi", fsync=False):
+                 algorithm=None, record_interval=0.02, backend="fmi", fsync=False,
+                 system=None, handles=None):
     """Run one scenario through our master on fmpy.
 
     The results folder is checked before anything runs; an older run's files in it are
@@ -137,6 +138,13 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         directly in this process (no FMI), to measure what the FMI layer costs.
     fsync : bool
         fsync ``results.csv`` at every flush (once a simulated second), not only at the end.
+    system : orchestrator.system.System, optional
+        The scenario's system, already loaded with the same ``fmu_dir`` (a sweep worker
+        keeps it between runs); default: loaded from ``scenario.system``.
+    handles : callable, optional
+        ``handles(instance_name, fmu_path)`` returns the FMU handle of an instance for the
+        ``"fmi"`` backend (a sweep worker passes warm, reusable ones); default a new
+        :class:`~orchestrator.fmu.FmuInstance` each.
 
     Returns
     -------
@@ -161,7 +169,8 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
     if not hasattr(scenario, "stop_time"):
         scenario = load_scenario(scenario)
-    system = load_system(scenario.system, fmu_dir=fmu_dir)
+    if system is None:
+        system = load_system(scenario.system, fmu_dir=fmu_dir)
     parameters = instance_parameters(system, scenario)
     rates = _rates(system, scenario)
     columns = _recorded_columns(system, scenario)
@@ -171,13 +180,15 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     folder = RunFolder(out_dir, own_files=PLOT_FILES)
     folder.check()
     if backend == "fmi":
-        handles = {name: FmuInstance(system.component(name).fmu_path, name) for name in order}
+        make = handles or FmuInstance
+        instances = {name: make(system.component(name).fmu_path, name) for name in order}
     else:
         from orchestrator.inprocess import SlaveInstance
 
-        handles = {name: SlaveInstance(system.component(name).model_description.modelName, name)
-                   for name in order}
-    specs = [InstanceSpec(name, handles[name], rates[name], parameters[name]) for name in order]
+        instances = {name: SlaveInstance(system.component(name).model_description.modelName,
+                                         name) for name in order}
+    specs = [InstanceSpec(name, instances[name], rates[name], parameters[name])
+             for name in order]
     links = [Link(str(c.start), str(c.end)) for c in system.connections]
     master = Master(specs, links, scenario.base_step, algorithm or scenario.master,
                     observed=columns)

@@ -1,22 +1,42 @@
-"""A small sweep on a Dask LocalCluster, and its resumption from stored runs."""
+"""Sweeps end to end: resumption, stale inputs, failed runs, warm workers, a real cluster."""
 
 import json
+import os
+import pickle
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
 from orchestrator.build import REPO_ROOT
+from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
-from orchestrator.sweep import sweep
+from orchestrator.sweep import plan_runs, sweep
+from orchestrator.sweep.worker import RunTask, WarmInstances, run_task
 
 pytestmark = pytest.mark.integration
 
+# Figures that depend on the machine's speed, not on the simulation.
+_TIMING = {"wall_time_s", "realtime_factor", "run_dir"}
+
+
+def _short(stop_time=2.0):
+    return load_scenario(REPO_ROOT / "scenarios" / "static_case1.toml").with_overrides(
+        stop_time=stop_time)
+
+
+def _figures(row):
+    return {k: v for k, v in row.items() if k not in _TIMING}
+
 
 def test_sweep_runs_each_combination_once_and_resumes(fmu_dir, tmp_path):
-    base = load_scenario(REPO_ROOT / "scenarios" / "static_case1.toml").with_overrides(
-        stop_time=2.0)
+    base = _short()
     grid = {"planner.v_cruise": [0.2, 0.3]}
     first = sweep(base, grid, tmp_path, fmu_dir=fmu_dir, workers=2, progress=False)
-    assert (first.computed, first.reused) == (2, 0)
+    assert (first.computed, first.reused, first.engine) == (2, 0, "local")
     assert [row["status"] for row in first.rows] == ["ok", "ok"]
     assert len({row["hash"] for row in first.rows}) == 2
     # a faster cruise speed covers more ground in the same 2 s
@@ -26,3 +46,191 @@ def test_sweep_runs_each_combination_once_and_resumes(fmu_dir, tmp_path):
     assert (again.computed, again.reused) == (0, 2)
     assert again.rows == first.rows
     assert json.loads(first.table_json.read_text()) == first.rows
+
+    # a summary cut short by a kill is not a finished run: it is computed again, no crash
+    summary = Path(first.rows[1]["run_dir"]) / "summary.json"
+    summary.write_text(summary.read_text()[:40])
+    resumed = sweep(base, grid, tmp_path, fmu_dir=fmu_dir, workers=2, progress=False)
+    assert (resumed.computed, resumed.reused) == (1, 1)
+    assert [_figures(r) for r in resumed.rows] == [_figures(r) for r in first.rows]
+
+
+def _write_waypoints(path, points):
+    path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in points), encoding="utf-8")
+
+
+def test_editing_a_waypoint_csv_invalidates_the_stored_run(fmu_dir, tmp_path):
+    waypoints = tmp_path / "waypoints.csv"
+    _write_waypoints(waypoints, [(0.0, 1.0), (0.0, 3.0)])
+    base = _short(3.0).with_overrides(parameters={"source.path": str(waypoints)})
+    first = sweep(base, {}, tmp_path / "sweep", fmu_dir=fmu_dir, workers=1, progress=False)
+    assert (first.computed, first.rows[0]["status"]) == (1, "ok")
+
+    _write_waypoints(waypoints, [(2.0, 1.0), (2.0, 3.0)])  # same name, the source moved 2 m
+    second = sweep(base, {}, tmp_path / "sweep", fmu_dir=fmu_dir, workers=1, progress=False)
+    assert (second.computed, second.reused) == (1, 0)
+    assert second.rows[0]["hash"] != first.rows[0]["hash"]
+    fresh = run_scenario(base, tmp_path / "fresh", progress=False, fmu_dir=fmu_dir, plots=False)
+    assert second.rows[0]["final_distance_to_source_m"] == \
+        fresh.summary["final_distance_to_source_m"]
+    assert abs(second.rows[0]["final_distance_to_source_m"]
+               - first.rows[0]["final_distance_to_source_m"]) > 0.5
+
+
+def test_the_key_covers_ssv_files_the_ssd_binds(fmu_dir, tmp_path):
+    ssd = (REPO_ROOT / "fmus" / "SystemStructure.ssd").read_text(encoding="utf-8")
+    marker = ('source="CurvaturePlanner.fmu">')
+    assert ssd.count(marker) == 1
+    ssd = ssd.replace(marker, marker + '<ssd:ParameterBindings><ssd:ParameterBinding '
+                      'source="planner.ssv"/></ssd:ParameterBindings>')
+    for fmu in Path(fmu_dir).glob("*.fmu"):
+        shutil.copy(fmu, tmp_path / fmu.name)
+    (tmp_path / "SystemStructure.ssd").write_text(ssd, encoding="utf-8")
+    ssv = tmp_path / "planner.ssv"
+
+    def key(a_max):
+        ssv.write_text(
+            '<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/'
+            'SystemStructureParameterValues" version="1.0" name="planner"><ssv:Parameters>'
+            f'<ssv:Parameter name="a_max"><ssv:Real value="{a_max}"/></ssv:Parameter>'
+            '</ssv:Parameters></ssv:ParameterSet>', encoding="utf-8")
+        base = _short().with_overrides(system=str(tmp_path / "SystemStructure.ssd"))
+        [run] = plan_runs(base, {}, tmp_path / "out")
+        assert any(label.startswith("ssv:planner.ssv") for label in run.digests)
+        return run.key
+
+    assert key(0.4) == key(0.4)
+    assert key(0.3) != key(0.4)
+
+
+def test_a_failed_run_is_a_row_and_the_sweep_goes_on(fmu_dir, tmp_path):
+    broken = tmp_path / "broken.csv"
+    broken.write_text("x,y\n0,1\n0,banana\n", encoding="utf-8")
+    base = _short(1.0)
+    result = sweep(base, {"source.path": [str(broken), "static"]}, tmp_path / "sweep",
+                   fmu_dir=fmu_dir, workers=2, progress=False)
+    by_path = {row["source.path"]: row for row in result.rows}
+    assert by_path["static"]["status"] == "ok"
+    assert by_path[str(broken)]["status"] == "failed"
+    # the row names the instance that refused (the model's own line, naming the CSV row,
+    # reaches it once the FMU logging is per instance: issue 11, point 1)
+    assert "instance source" in by_path[str(broken)]["error"]
+    assert (result.computed, result.failed) == (2, 1)
+    table = json.loads(result.table_json.read_text())
+    assert [row["status"] for row in table] == [row["status"] for row in result.rows]
+    # a failed run is not a finished one: the next sweep tries it again
+    again = sweep(base, {"source.path": [str(broken), "static"]}, tmp_path / "sweep",
+                  fmu_dir=fmu_dir, workers=2, progress=False)
+    assert (again.computed, again.reused, again.failed) == (1, 1, 1)
+
+
+_FRESH_RUN = """
+import pickle, sys
+from orchestrator.run import run_scenario
+scenario, out, fmu_dir = pickle.load(open(sys.argv[1], "rb"))
+run_scenario(scenario, out, progress=False, fmu_dir=fmu_dir, plots=False)
+"""
+
+
+def test_a_warm_workers_run_is_bit_identical_to_a_fresh_process(fmu_dir, tmp_path):
+    base = _short(2.0)
+    other = base.with_overrides(seed=5, parameters={"planner.v_cruise": 0.35,
+                                                    "planner.mode": "pure_pursuit"})
+    target = base.with_overrides(seed=3, parameters={"planner.v_cruise": 0.25})
+    job = tmp_path / "job.pickle"
+    job.write_bytes(pickle.dumps((target, str(tmp_path / "fresh"), str(fmu_dir))))
+    subprocess.run([sys.executable, "-c", _FRESH_RUN, str(job)], check=True, timeout=300)
+
+    warm = WarmInstances()
+    try:
+        for name, scenario in (("first", other), ("second", target)):
+            summary = run_task(RunTask(scenario, str(tmp_path / name), name, str(fmu_dir)),
+                               warm=warm)
+            assert summary["status"] == "ok", summary
+        assert (warm.created, warm.reused) == (6, 6)  # the second run reset all six instances
+    finally:
+        warm.clear()
+    fresh = (tmp_path / "fresh" / "results.csv").read_bytes()
+    assert (tmp_path / "second" / "results.csv").read_bytes() == fresh
+    assert (tmp_path / "first" / "results.csv").read_bytes() != fresh
+    fresh_summary = json.loads((tmp_path / "fresh" / "summary.json").read_text())
+    warm_summary = json.loads((tmp_path / "second" / "summary.json").read_text())
+    assert _figures(warm_summary) == _figures(fresh_summary)
+
+
+def _dask_cli():
+    return str(Path(sys.executable).with_name("dask"))
+
+
+def _stop(processes):
+    for process in processes:
+        if process.poll() is None:
+            process.terminate()
+    deadline = time.monotonic() + 20
+    for process in processes:
+        try:
+            process.wait(timeout=max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=10)
+
+
+def test_a_real_scheduler_and_two_workers_give_the_local_engines_rows(fmu_dir, tmp_path):
+    from distributed import Client
+
+    base = _short(1.0)
+    grid = {"planner.v_cruise": [0.2, 0.3]}
+    scheduler_file = tmp_path / "scheduler.json"
+    common = {"cwd": tmp_path, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL,
+              "env": {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}}
+    processes = [subprocess.Popen(
+        [_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+         "--scheduler-file", str(scheduler_file)], **common)]
+    try:
+        deadline = time.monotonic() + 60
+        while not scheduler_file.is_file() and time.monotonic() < deadline:
+            assert processes[0].poll() is None, "dask scheduler exited"
+            time.sleep(0.2)
+        address = json.loads(scheduler_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        for _ in range(2):
+            processes.append(subprocess.Popen(
+                [_dask_cli(), "worker", address, "--nthreads", "1", "--no-dashboard",
+                 "--host", "127.0.0.1", "--local-directory", str(tmp_path / "dask")], **common))
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=90)
+            assert len(client.scheduler_info()["workers"]) == 2
+        on_cluster = sweep(base, grid, tmp_path / "cluster", fmu_dir=fmu_dir, scheduler=address,
+                           progress=False)
+    finally:
+        _stop(processes)
+    local = sweep(base, grid, tmp_path / "local", fmu_dir=fmu_dir, workers=2, progress=False)
+    assert (on_cluster.engine, local.engine) == ("cluster", "local")
+    assert [r["status"] for r in on_cluster.rows] == ["ok", "ok"]
+    assert [_figures(r) for r in on_cluster.rows] == [_figures(r) for r in local.rows]
+
+
+@pytest.mark.parametrize("arguments, fragment", [
+    (["--workers", "-1"], "--workers '-1': expected a whole number of worker processes >= 1"),
+    (["--workers", "two"], "--workers 'two'"),
+    (["--seeds", "5..1"], "--seeds '5..1': the range is empty (5 > 1)"),
+    (["--set", "planner.bogus=1"], "planner has no parameter 'bogus'; its parameters are "
+                                   "track_width, v_cruise"),
+    (["--set", "bogus.x=1"], "no instance 'bogus'; instances are source, localizer"),
+    (["--set", "planner.v_cruise=0.2", "--set", "planner.v_cruise=0.3"], "given twice"),
+    (["--scheduler", "tcp://127.0.0.1:1"], "--scheduler tcp://127.0.0.1:1: no Dask scheduler "
+                                           "answers there"),
+], ids=["workers-negative", "workers-word", "seeds-empty", "unknown-parameter",
+        "unknown-instance", "set-twice", "no-scheduler"])
+def test_bad_sweep_arguments_give_one_line_and_a_nonzero_exit(fmu_dir, tmp_path, arguments,
+                                                              fragment):
+    completed = subprocess.run(
+        [sys.executable, "-m", "orchestrator.cli", "sweep", "scenarios/static_case1.toml",
+         "--out", str(tmp_path / "sweep"), "--fmu-dir", str(fmu_dir), "--quiet", *arguments],
+        cwd=REPO_ROOT, capture_output=True, text=True, timeout=120)
+    assert completed.returncode != 0
+    lines = completed.stderr.strip().splitlines()
+    assert len(lines) == 1, completed.stderr
+    assert fragment in lines[0]
+    assert "Traceback" not in completed.stderr
+    assert not (tmp_path / "sweep" / "runs").exists()

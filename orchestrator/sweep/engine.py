@@ -1,0 +1,264 @@
+"""Where a sweep's runs execute: Dask, on this machine or on a cluster.
+
+Both engines hand the same task function (:func:`orchestrator.sweep.worker.run_task`) to
+Dask and report each result as it arrives, so the sweep writes one store and one table
+whichever runs it:
+
+- :class:`LocalEngine` (the default): Dask's local process scheduler
+  (:func:`dask.multiprocessing.get`) over a pool of worker processes that this engine keeps
+  for its whole life. The pool starts in milliseconds (processes are forked from this one when
+  it has no other threads, else from a clean fork server), and its workers keep FMUs loaded
+  and instances warm from one run, and one sweep, to the next.
+- :class:`ClusterEngine`: a ``dask.distributed`` scheduler given by address (``dask
+  scheduler`` / ``dask worker`` on any machines that see the same files) or an existing
+  ``Client``; the workers keep their instances warm the same way.
+
+:func:`open_engine` picks one from the CLI's ``--scheduler`` / ``--workers``.
+"""
+
+import os
+import signal
+import socket
+import threading
+from urllib.parse import urlsplit
+
+from components.common.errors import ConfigError
+
+__all__ = ["ClusterEngine", "LocalEngine", "open_engine"]
+
+
+def _check_workers(workers):
+    if workers is None:
+        return max(1, os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError(f"--workers {workers!r}: expected a whole number of worker "
+                          f"processes >= 1 (this machine has {os.cpu_count()} CPUs)")
+    return workers
+
+
+def _ignore_interrupts():
+    # Ctrl-C belongs to the sweep's process, which stops the pool; a worker interrupted in the
+    # middle of an FMU call would only turn it into an fmi2Fatal.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _process_id():
+    return os.getpid()
+
+
+def _pool_context():
+    import multiprocessing
+
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return multiprocessing.get_context("fork")
+    if "forkserver" in methods:
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(["orchestrator.sweep.worker", "orchestrator.run",
+                                        "orchestrator.system", "fmpy"])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
+class LocalEngine:
+    """Runs tasks on Dask's local process scheduler over a kept pool of worker processes.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes (default: the number of CPUs).
+
+    Examples
+    --------
+    >>> with LocalEngine(workers=2) as engine:                      # doctest: +SKIP
+    ...     first = sweep(base, grid_a, "out/a", engine=engine)
+    ...     second = sweep(base, grid_b, "out/b", engine=engine)    # warm workers
+    """
+
+    name = "local"
+
+    def __init__(self, workers=None):
+        self.workers = _check_workers(workers)
+        self._pool = None
+
+    def start(self):
+        """Start the worker processes now (otherwise at the first run); return self."""
+        if self._pool is None:
+            from concurrent.futures import ProcessPoolExecutor
+
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=_pool_context(),
+                                             initializer=_ignore_interrupts)
+            pings = [self._pool.submit(_process_id) for _ in range(self.workers)]
+            for ping in pings:
+                ping.result()
+        return self
+
+    def run(self, function, tasks, on_result):
+        """Run ``function(task)`` for each ``(key, task)``; ``on_result(key, result)`` as each ends.
+
+        A worker process that dies (a crash in native code) breaks the pool: a new pool takes
+        the unfinished tasks, and a task that was unfinished at two such breaks is reported
+        as failed instead of being tried again.
+        """
+        from concurrent.futures.process import BrokenProcessPool
+
+        from dask.multiprocessing import get
+
+        remaining = dict(tasks)
+        breaks = {key: 0 for key in remaining}
+
+        def posttask(key, result, dsk, state, worker_id):
+            remaining.pop(key, None)
+            on_result(key, result)
+
+        while remaining:
+            self.start()
+            graph = {key: (function, task) for key, task in remaining.items()}
+            try:
+                get(graph, list(graph), pool=self._pool, chunksize=1,
+                    callbacks=[(None, None, None, posttask, None)])
+            except BrokenProcessPool:
+                self._drop_pool()
+                for key in list(remaining):
+                    breaks[key] += 1
+                    if breaks[key] >= 2:
+                        remaining.pop(key)
+                        on_result(key, {"status": "failed", "error": "the worker process "
+                                        "running it died (twice); see the run's folder"})
+            except BaseException:
+                self._drop_pool()
+                raise
+
+    def _drop_pool(self):
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        for process in list(getattr(pool, "_processes", {}).values()):
+            if process.is_alive():
+                process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)
+
+    def close(self):
+        """Stop the worker processes."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _check_reachable(address, timeout):
+    """Fail fast, with one line, when nothing listens at a ``tcp://host:port`` address."""
+    text = address if "://" in address else f"tcp://{address}"
+    parts = urlsplit(text)
+    if parts.scheme != "tcp":
+        return
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port:
+        raise ConfigError(f"--scheduler {address!r}: expected tcp://HOST:PORT, e.g. "
+                          "tcp://127.0.0.1:8786")
+    try:
+        socket.create_connection((host, port), timeout=timeout).close()
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise ConfigError(f"--scheduler {address}: no Dask scheduler answers there ({reason});"
+                          " start one with `dask scheduler` and give its tcp://HOST:8786 "
+                          "address, or leave --scheduler out to run on this machine") from None
+
+
+class ClusterEngine:
+    """Runs tasks on a ``dask.distributed`` scheduler.
+
+    Parameters
+    ----------
+    scheduler : str or distributed.Client
+        Scheduler address (``tcp://host:8786``) or a connected client (kept open on close).
+    timeout : float
+        Seconds to wait for the scheduler to answer.
+    """
+
+    name = "cluster"
+
+    def __init__(self, scheduler, timeout=10.0):
+        from distributed import Client
+
+        if isinstance(scheduler, Client):
+            self.client, self._own = scheduler, False
+            return
+        address = str(getattr(scheduler, "scheduler_address", scheduler))
+        _check_reachable(address, timeout)
+        try:
+            self.client = Client(address, timeout=f"{timeout}s", set_as_default=False)
+        except (OSError, TimeoutError) as error:
+            raise ConfigError(f"--scheduler {address}: cannot connect to a Dask scheduler "
+                              f"there within {timeout:g} s ({' '.join(str(error).split())})") \
+                from None
+        self._own = True
+
+    def start(self):
+        """Nothing to start (the cluster runs already); return self."""
+        return self
+
+    def run(self, function, tasks, on_result):
+        """Run ``function(task)`` for each ``(key, task)``; ``on_result(key, result)`` as each ends.
+
+        A task lost with its worker (``KilledWorker``) or failing to unpickle on a worker is
+        reported as failed with the reason.
+        """
+        import uuid
+
+        from distributed import as_completed
+
+        token = uuid.uuid4().hex[:8]
+        futures = {self.client.submit(function, task, key=f"sonotrack-run-{key}-{token}",
+                                      pure=False): key for key, task in tasks}
+        try:
+            for future in as_completed(futures, loop=self.client.loop):
+                key = futures[future]
+                try:
+                    result = future.result()
+                except Exception as error:
+                    result = {"status": "failed",
+                              "error": f"{type(error).__name__}: {' '.join(str(error).split())}"}
+                on_result(key, result)
+                future.release()
+        except BaseException:
+            self.client.cancel(list(futures))
+            raise
+
+    def close(self):
+        """Disconnect (only a client this engine opened)."""
+        if self._own:
+            self.client.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def open_engine(scheduler=None, workers=None, timeout=10.0):
+    """The engine for ``--scheduler`` / ``--workers``: a cluster if given, else local.
+
+    Raises
+    ------
+    ConfigError
+        If ``workers`` is not a whole number >= 1, both are given, or the scheduler cannot be
+        reached (each in one line naming the option and what is valid).
+    """
+    if scheduler is not None and not isinstance(scheduler, str):
+        return ClusterEngine(scheduler, timeout=timeout)
+    if scheduler:
+        if workers is not None:
+            raise ConfigError("--workers applies to this machine's engine; with --scheduler "
+                              "the workers are the `dask worker` processes of the cluster")
+        return ClusterEngine(scheduler, timeout=timeout)
+    return LocalEngine(workers)

@@ -1,0 +1,79 @@
+"""The sweep's files: stored runs read defensively, the table written atomically.
+
+A run is stored in ``<out>/runs/<key>/`` and counts as done only when its ``summary.json``
+parses as a JSON object whose ``status`` is ``"ok"``. Anything else (no summary, a summary
+truncated by a kill, a failed or interrupted run) means "run it
+again", never a crash and never a stale answer.
+
+The table (``sweep.csv`` and ``sweep.json``) is written to a temporary file in the same
+folder and renamed over the old one, so a reader (or a killed sweep) sees either the previous
+table or the new one, never half of one.
+"""
+
+import csv
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["finished_summary", "read_summary", "table_columns", "write_atomic", "write_table"]
+
+# Row fields that come first in the table, after the swept settings.
+_LEADING = ("seed", "status", "error", "hash", "run_dir")
+
+
+def read_summary(path):
+    """Return the JSON object in ``path``, or None if it is missing, unreadable or not one."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+        data = json.loads(text)
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def finished_summary(run_dir):
+    """The summary of a finished run in ``run_dir``, or None if it must run (again)."""
+    summary = read_summary(Path(run_dir) / "summary.json")
+    if summary is None or summary.get("status") != "ok":
+        return None
+    return summary
+
+
+def write_atomic(path, text):
+    """Write ``text`` to ``path`` through a temporary file and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+            stream.write(text)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def table_columns(rows, settings=()):
+    """Column order: swept settings, then seed/status/error/hash/run_dir, then the figures."""
+    present = list(dict.fromkeys(k for row in rows for k in row))
+    leading = [k for k in settings if k in present and k not in _LEADING]
+    leading += [k for k in _LEADING if k in present]
+    return leading + [k for k in present if k not in leading]
+
+
+def write_table(rows, out_dir, settings=()):
+    """Write ``sweep.json`` and ``sweep.csv`` in ``out_dir`` atomically; return their paths."""
+    out_dir = Path(out_dir)
+    table_json = out_dir / "sweep.json"
+    table_csv = out_dir / "sweep.csv"
+    write_atomic(table_json, json.dumps(rows, indent=2, allow_nan=True) + "\n")
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, table_columns(rows, settings), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_atomic(table_csv, buffer.getvalue())
+    return table_csv, table_json

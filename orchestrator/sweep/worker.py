@@ -1,0 +1,226 @@
+"""The worker side of a sweep: one run per task, on FMU instances kept warm between runs.
+
+A worker process (a local pool process or a ``dask worker``) keeps, between tasks, the loaded
+systems and one set of FMU instances per system. The next run resets those instances
+(``fmi2Reset``, then the experiment set-up and parameters again) instead of loading and
+instantiating the FMUs anew; a reset instance holds nothing of the last run, so a warm run
+gives the same numbers, bit for bit, as a run in a fresh process.
+
+Before a run uses an FMU, its content is checked against the digest the sweep hashed; a file
+changed under a running sweep, or another machine's different copy, fails the run with a line
+saying so rather than giving another build's answer under this key. An instance that failed
+is freed (never reused); a pythonfmu instance that reported ``fmi2Fatal`` is dropped without
+a call.
+
+:func:`run_task` never raises: its result is the run's summary, with ``status`` ``"failed"``
+and the reason in ``error`` when the run could not be done.
+"""
+
+import os
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["RunTask", "WarmInstances", "run_task", "warm_instances"]
+
+
+@dataclass
+class RunTask:
+    """What a worker needs for one run (pickled to the worker).
+
+    Attributes
+    ----------
+    scenario : orchestrator.scenario.Scenario
+        The scenario to run.
+    run_dir : str
+        Folder of the run (absolute; shared with the client on a cluster).
+    key : str
+        The run's key (its folder name).
+    fmu_dir : str or None
+        Folder of the FMUs, if not beside the ``.ssd``.
+    fmu_digests : dict
+        Instance name to the SHA-256 of its FMU, as the sweep hashed it.
+    record_interval : float
+        Simulated seconds between recorded rows.
+    """
+
+    scenario: object
+    run_dir: str
+    key: str
+    fmu_dir: str | None = None
+    fmu_digests: dict = field(default_factory=dict)
+    record_interval: float = 0.02
+
+
+class WarmInstances:
+    """FMU instances and loaded systems kept by one worker process between runs.
+
+    Instances are kept per ``(instance name, FMU path, FMU digest)``; a run takes one of
+    each it needs (or makes a new one) and gives them back when it succeeded. Safe to use from
+    several threads (a ``dask worker`` with more than one thread runs tasks side by side).
+    """
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._idle = {}
+        self._systems = {}
+        self._digests = {}
+        self.created = 0
+        self.reused = 0
+
+    def file_digest(self, path):
+        """SHA-256 of a file, recomputed only when its size, mtime or inode changed."""
+        from orchestrator.sweep.inputs import file_digest
+
+        path = Path(path).resolve()
+        stat = path.stat()
+        signature = (stat.st_size, stat.st_mtime_ns, stat.st_ino)
+        cached = self._digests.get(path)
+        if cached is None or cached[0] != signature:
+            cached = (signature, file_digest(path))
+            self._digests[path] = cached
+        return cached[1]
+
+    def system(self, ssd_path, fmu_dir):
+        """The loaded system of an ``.ssd`` (kept while the ``.ssd`` file is unchanged)."""
+        from orchestrator.system import load_system
+
+        key = (str(ssd_path), str(fmu_dir))
+        signature = self.file_digest(ssd_path)
+        with self._lock:
+            cached = self._systems.get(key)
+        if cached is None or cached[0] != signature:
+            cached = (signature, load_system(ssd_path, fmu_dir=fmu_dir))
+            with self._lock:
+                self._systems[key] = cached
+        return cached[1]
+
+    def acquire(self, instance_name, fmu_path, digest):
+        """A warm instance for this run, or a new reusable one."""
+        from orchestrator.fmu import FmuInstance
+
+        key = (instance_name, str(fmu_path), digest)
+        with self._lock:
+            idle = self._idle.get(key)
+            if idle:
+                self.reused += 1
+                return idle.pop()
+            self.created += 1
+        return FmuInstance(fmu_path, instance_name, reusable=True)
+
+    def give_back(self, instance_name, fmu_path, digest, handle):
+        """Keep a terminated instance of a successful run for the next run."""
+        with self._lock:
+            self._idle.setdefault((instance_name, str(fmu_path), digest), []).append(handle)
+
+    def clear(self, free=True):
+        """Forget every idle instance (freeing them unless ``free`` is False)."""
+        with self._lock:
+            idle, self._idle = self._idle, {}
+            self._systems = {}
+        if free:
+            for handles in idle.values():
+                for handle in handles:
+                    _release(handle)
+
+
+def _release(handle):
+    try:
+        handle.release()
+    except Exception:  # an instance that cannot be freed is left to the process exit
+        pass
+
+
+_WARM = WarmInstances()
+
+
+def warm_instances():
+    """The :class:`WarmInstances` of this process."""
+    return _WARM
+
+
+def _forget_in_child():
+    # A forked child must not free (or reuse) instances that belong to its parent.
+    global _WARM
+    _WARM = WarmInstances()
+
+
+os.register_at_fork(after_in_child=_forget_in_child)
+
+
+def _failed(error, started):
+    return {"status": "failed", "error": error, "wall_time_s": time.perf_counter() - started}
+
+
+def run_task(task, warm=None):
+    """Do one run of a sweep on this worker; return its summary (never raises).
+
+    Parameters
+    ----------
+    task : RunTask
+    warm : WarmInstances, optional
+        Where instances are kept between runs (default: this process's).
+
+    Returns
+    -------
+    dict
+        The run's summary; ``status`` is ``"ok"``, or ``"failed"`` with ``error``.
+    """
+    started = time.perf_counter()
+    try:
+        return _run(task, warm if warm is not None else _WARM)
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # a run's failure is its row's business, not the sweep's
+        from components.common.errors import SonotrackError
+        from orchestrator.sweep.store import read_summary
+
+        text = str(exc) if isinstance(exc, SonotrackError) else f"{type(exc).__name__}: {exc}"
+        text = " ".join(text.split()) or type(exc).__name__
+        summary = read_summary(Path(task.run_dir) / "summary.json")
+        if summary is not None and summary.get("status") != "ok":
+            # the run got as far as its own summary: keep its figures, say why it stopped
+            summary.setdefault("error", text)
+            return summary
+        return _failed(text, started)
+
+
+def _run(task, warm):
+    from components.common.errors import ConfigError
+    from orchestrator.run import run_scenario
+
+    scenario = task.scenario
+    system = warm.system(scenario.system, task.fmu_dir)
+    used = {}
+    for component in system.components:
+        expected = task.fmu_digests.get(component.name)
+        actual = warm.file_digest(component.fmu_path)
+        if expected is not None and actual != expected:
+            raise ConfigError(
+                f"{component.fmu_path}: the FMU of {component.name} on this worker is not the "
+                f"one the sweep hashed (sha256 {actual[:12]} instead of {expected[:12]}); "
+                "was it rebuilt during the sweep, or do the workers see other files?")
+        used[component.name] = (component.fmu_path, actual)
+
+    taken = []
+
+    def handle(fmu_path, instance_name):
+        path, digest = used[instance_name]
+        instance = warm.acquire(instance_name, path, digest)
+        taken.append((instance_name, path, digest, instance))
+        return instance
+
+    run_dir = Path(task.run_dir)
+    (run_dir / "summary.json").unlink(missing_ok=True)
+    try:
+        result = run_scenario(scenario, run_dir, progress=False, fmu_dir=task.fmu_dir,
+                              plots=False, record_interval=task.record_interval,
+                              system=system, handles=handle)
+    except BaseException:
+        for *_, instance in taken:
+            _release(instance)
+        raise
+    for name, path, digest, instance in taken:
+        warm.give_back(name, path, digest, instance)
+    return result.summary
