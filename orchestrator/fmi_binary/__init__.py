@@ -21,7 +21,7 @@ from xml.etree import ElementTree
 from components.common.errors import BuildError
 
 __all__ = ["LIBRARY", "SOURCE", "BINDING_FILE", "build_tag", "install_binary", "binding_table",
-           "pythonfmu_binary"]
+           "pythonfmu_binary", "restore_pythonfmu_binary"]
 
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / "sonotrack_fmi2.c"
@@ -109,8 +109,7 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
     package, entry, class_name : str
         See :func:`binding_table`.
     library : path-like, optional
-        The compiled binary (default: the one ``make`` builds; benchmarks pass
-        :func:`pythonfmu_binary` to build the same FMU with pythonfmu's).
+        The compiled binary (default: the one ``make`` builds).
     """
     fmu_path = Path(fmu_path)
     library = Path(library)
@@ -118,16 +117,36 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
         raise BuildError(f"FMI binary {library} is missing: run `make` (target {library.name})")
     if library == LIBRARY and library.stat().st_mtime < SOURCE.stat().st_mtime:
         raise BuildError(f"FMI binary {library} is older than {SOURCE.name}: run `make`")
+    description, identifier = _description(fmu_path)
+    table = binding_table(description, package, entry, class_name).encode()
+    _rewrite(fmu_path, {f"binaries/linux64/{identifier}.so": library.read_bytes(),
+                        BINDING_FILE: table})
+    return fmu_path
+
+
+def restore_pythonfmu_binary(fmu_path):
+    """Put pythonfmu's own linux64 binary back into an FMU (for side-by-side comparisons)."""
+    fmu_path = Path(fmu_path)
+    _, identifier = _description(fmu_path)
+    _rewrite(fmu_path, {f"binaries/linux64/{identifier}.so": pythonfmu_binary().read_bytes(),
+                        BINDING_FILE: None})
+    return fmu_path
+
+
+def _description(fmu_path):
+    with zipfile.ZipFile(fmu_path) as archive:
+        try:
+            description = archive.read("modelDescription.xml")
+        except KeyError:
+            raise BuildError(f"{fmu_path}: no modelDescription.xml") from None
+    identifier = ElementTree.fromstring(description).find("CoSimulation").get("modelIdentifier")
+    return description, identifier
+
+
+def _rewrite(fmu_path, replaced):
+    """Rewrite the zip with ``replaced`` entries (None: removed), atomically."""
     with zipfile.ZipFile(fmu_path) as archive:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
-    description = next((data for info, data in entries if info.filename == "modelDescription.xml"),
-                       None)
-    if description is None:
-        raise BuildError(f"{fmu_path}: no modelDescription.xml")
-    identifier = ElementTree.fromstring(description).find("CoSimulation").get("modelIdentifier")
-    target = f"binaries/linux64/{identifier}.so"
-    table = binding_table(description, package, entry, class_name).encode()
-    replaced = {target: library.read_bytes(), BINDING_FILE: table}
     handle, temporary = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
     os.close(handle)
     try:
@@ -136,12 +155,12 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
                 if info.filename not in replaced:
                     archive.writestr(info, data)
             for name, data in replaced.items():
-                archive.writestr(name, data)
+                if data is not None:
+                    archive.writestr(name, data)
         os.replace(temporary, fmu_path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
-    return fmu_path
 
 
 def pythonfmu_binary():

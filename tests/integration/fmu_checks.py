@@ -1,4 +1,5 @@
-"""Shared checks on a built FMU: isolation from the repo, state round trip, libcosim parity."""
+"""Shared checks on a built FMU: isolation from the repo, state round trip, libcosim parity,
+instantiate/free cycles (sys.path, sys.modules, RSS)."""
 
 import json
 import math
@@ -153,3 +154,46 @@ def run_libcosim(path, drive, h, steps, parameters=None):
                                capture_output=True, text=True, timeout=600)
     assert completed.returncode == 0, completed.stderr[-2000:]
     return [tuple(row) for row in json.loads(completed.stdout.strip().splitlines()[-1])]
+
+
+_CYCLES = textwrap.dedent('''
+    import json, resource, sys
+    import fmpy
+    from fmpy.fmi2 import FMU2Slave
+
+    path, cycles = sys.argv[1], int(sys.argv[2])
+    description = fmpy.read_model_description(path)
+    slave = FMU2Slave(guid=description.guid, unzipDirectory=fmpy.extract(path),
+                      modelIdentifier=description.coSimulation.modelIdentifier, instanceName="c")
+
+    def cycle():
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.005)
+        slave.terminate()
+        slave.fmi2FreeInstance(slave.component)
+
+    def rss_kib():
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * resource.getpagesize() // 1024
+
+    for _ in range(20):  # first load of the code and warm-up of the allocator
+        cycle()
+    path_before, modules_before, rss_before = list(sys.path), set(sys.modules), rss_kib()
+    for _ in range(cycles):
+        cycle()
+    print(json.dumps({"path_unchanged": sys.path == path_before,
+                      "modules_added": sorted(set(sys.modules) - modules_before),
+                      "modules_removed": sorted(modules_before - set(sys.modules)),
+                      "rss_growth_kib": rss_kib() - rss_before, "cycles": cycles}))
+''')
+
+
+def instantiate_free_cycles(path, cycles=500):
+    """Run ``cycles`` instantiate/step/free cycles of one FMU in a fresh Python; return facts."""
+    completed = subprocess.run([sys.executable, "-c", _CYCLES, str(path), str(cycles)],
+                               capture_output=True, text=True, cwd="/", timeout=600)
+    assert completed.returncode == 0, completed.stderr[-2000:]
+    return json.loads(completed.stdout.splitlines()[-1])

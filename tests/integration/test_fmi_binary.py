@@ -19,6 +19,7 @@ import pytest
 
 from orchestrator.build import FMU_PACKAGES, REPO_ROOT, build_fmu
 
+from .fmu_checks import instantiate_free_cycles
 from .test_fmus import DRIVES
 
 pytestmark = pytest.mark.integration
@@ -456,49 +457,6 @@ def test_an_initialization_call_returning_false_is_an_error(probe):
 
 
 # ----- no trace in sys.path / sys.modules per instance -------------------------------------------
-
-_CYCLES = textwrap.dedent('''
-    import json, resource, sys
-    import fmpy
-    from fmpy.fmi2 import FMU2Slave
-
-    path, cycles = sys.argv[1], int(sys.argv[2])
-    description = fmpy.read_model_description(path)
-    slave = FMU2Slave(guid=description.guid, unzipDirectory=fmpy.extract(path),
-                      modelIdentifier=description.coSimulation.modelIdentifier, instanceName="c")
-
-    def cycle():
-        slave.instantiate()
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.exitInitializationMode()
-        slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.005)
-        slave.terminate()
-        slave.fmi2FreeInstance(slave.component)
-
-    def rss_kib():
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[1]) * resource.getpagesize() // 1024
-
-    for _ in range(20):  # first load of the code and warm-up of the allocator
-        cycle()
-    path_before, modules_before, rss_before = list(sys.path), set(sys.modules), rss_kib()
-    for _ in range(cycles):
-        cycle()
-    print(json.dumps({"path_unchanged": sys.path == path_before,
-                      "modules_added": sorted(set(sys.modules) - modules_before),
-                      "modules_removed": sorted(modules_before - set(sys.modules)),
-                      "rss_growth_kib": rss_kib() - rss_before, "cycles": cycles}))
-''')
-
-
-def instantiate_free_cycles(path, cycles=500):
-    """Run ``cycles`` instantiate/step/free cycles of one FMU in a fresh Python; return facts."""
-    completed = subprocess.run([sys.executable, "-c", _CYCLES, str(path), str(cycles)],
-                               capture_output=True, text=True, cwd="/", timeout=600)
-    assert completed.returncode == 0, completed.stderr[-2000:]
-    return json.loads(completed.stdout.splitlines()[-1])
-
 
 def test_500_instantiations_leave_sys_path_and_sys_modules_unchanged(fmu_paths):
     facts = instantiate_free_cycles(fmu_paths["WheelController"], 500)

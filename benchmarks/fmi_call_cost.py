@@ -1,0 +1,281 @@
+"""Cost of FMI calls through sonotrack's FMU binary against pythonfmu's, on the same slave.
+
+WheelController is built twice from this checkout: once as ``sonotrack build`` ships it (our
+binary) and once with pythonfmu 0.7.0's linux64 binary put back. Both are loaded in one Python
+process and called through their raw ctypes functions (as the master's hot path calls them):
+
+* ``getReal`` of 1 and of 20 values, ``setReal`` of the 2 inputs, ``doStep`` (which includes the
+  controller's own computation, the same in both);
+* each measured as a batch of calls, the two binaries alternating batch by batch (their order
+  swapped every repetition); medians of the per-call times and of the per-pair ratios. Times are
+  the calling thread's CPU time (``time.thread_time``): on a shared machine, wall time also
+  counts the time the process waits for a core, which made single batches 10x slower here;
+* ``doStep`` also split into the model's own ``do_step`` (the slave class called directly in
+  Python, same inputs) and the binary's overhead (the rest), since the model's share is common
+  to both binaries and bounds the ratio of the totals.
+
+Also: the default scenario's stepping time (scenarios/s_curve.toml, summary ``wall_time_s``) with
+all five FMUs built each way, one fresh process per run, runs alternating; and the RSS growth
+over 500 instantiate/free cycles of WheelController with our binary (with sys.path and
+sys.modules unchanged). Target: ours <= 0.7x pythonfmu's per call.
+
+Writes benchmarks/results/fmi_call_cost.json.
+
+    python benchmarks/fmi_call_cost.py [--repeats 21] [--calls 5000] [--scenario-runs 3]
+"""
+
+import argparse
+import ctypes
+import json
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import median, write_result  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+NAMES = ("RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner", "WheelController")
+TARGET_RATIO = 0.7
+
+
+def build_both(names, out):
+    """Build ``names`` into out/ours and out/pythonfmu (same code, different linux64 binary)."""
+    from orchestrator.build import build_fmu
+    from orchestrator.fmi_binary import restore_pythonfmu_binary
+
+    paths = {"ours": {}, "pythonfmu": {}}
+    for name in names:
+        paths["ours"][name] = build_fmu(name, out / "ours")
+        paths["pythonfmu"][name] = restore_pythonfmu_binary(build_fmu(name, out / "pythonfmu"))
+    return paths
+
+
+class Raw:
+    """One initialised WheelController instance behind raw ctypes FMI functions."""
+
+    def __init__(self, path, label):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave, fmi2ValueReference
+
+        description = read_model_description(str(path))
+        self.slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(path)),
+                               modelIdentifier="WheelController", instanceName=label)
+        self.slave.instantiate(loggingOn=False)
+        self.slave.setupExperiment(startTime=0.0)
+        self.slave.enterInitializationMode()
+        self.slave.exitInitializationMode()
+        refs = {v.name: v.valueReference for v in description.modelVariables}
+        reals = [v.valueReference for v in description.modelVariables if v.type == "Real"][:20]
+        assert len(reals) == 20
+        self.component = self.slave.component
+        f = self.slave._functions
+        self.get, self.set, self.step = f["fmi2GetReal"], f["fmi2SetReal"], f["fmi2DoStep"]
+        self.one = (fmi2ValueReference * 1)(refs["voltage"])
+        self.twenty = (fmi2ValueReference * 20)(*reals)
+        self.inputs = (fmi2ValueReference * 2)(refs["v_ref"], refs["v_meas"])
+        self.out1 = (ctypes.c_double * 1)()
+        self.out20 = (ctypes.c_double * 20)()
+        self.in2 = (ctypes.c_double * 2)(0.3, 0.1)
+        self.k = 0
+
+    def operations(self):
+        c, get, set_, step = self.component, self.get, self.set, self.step
+        one, twenty, inputs, out1, out20, in2 = (self.one, self.twenty, self.inputs, self.out1,
+                                                 self.out20, self.in2)
+
+        def get_real_1(n):
+            for _ in range(n):
+                get(c, one, 1, out1)
+
+        def get_real_20(n):
+            for _ in range(n):
+                get(c, twenty, 20, out20)
+
+        def set_real_2(n):
+            for _ in range(n):
+                set_(c, inputs, 2, in2)
+
+        def do_step(n):
+            k = self.k
+            for i in range(k, k + n):
+                if step(c, i * 0.005, 0.005, 1) != 0:
+                    raise RuntimeError("fmi2DoStep failed")
+            self.k = k + n
+
+        return {"getReal_1": get_real_1, "getReal_20": get_real_20, "setReal_2": set_real_2,
+                "doStep": do_step}
+
+
+def call_costs(paths, repeats, calls):
+    ours, theirs = Raw(paths["ours"]["WheelController"], "ours"), \
+        Raw(paths["pythonfmu"]["WheelController"], "pythonfmu")
+    # both return the same numbers before anything is timed
+    a, b = ours.operations(), theirs.operations()
+    for ops in (a, b):
+        ops["setReal_2"](1)
+        ops["doStep"](1)
+        ops["getReal_20"](1)
+    assert list(ours.out20) == list(theirs.out20), "the two builds disagree"
+    result = {}
+    for name in a:
+        batch = calls if name != "doStep" else max(1, calls // 10)
+        per_call = {"ours": [], "pythonfmu": []}
+        ratios = []
+        for r in range(repeats):
+            timings = {}
+            order = (("ours", a), ("pythonfmu", b)) if r % 2 == 0 else \
+                (("pythonfmu", b), ("ours", a))
+            for label, ops in order:
+                started = time.thread_time()
+                ops[name](batch)
+                timings[label] = (time.thread_time() - started) / batch
+            per_call["ours"].append(timings["ours"])
+            per_call["pythonfmu"].append(timings["pythonfmu"])
+            ratios.append(timings["ours"] / timings["pythonfmu"])
+        result[name] = {"ours_us": median(per_call["ours"]) * 1e6,
+                        "pythonfmu_us": median(per_call["pythonfmu"]) * 1e6,
+                        "ratio_median_of_pairs": median(ratios),
+                        "calls_per_batch": batch, "pairs": repeats,
+                        "target_met": median(ratios) <= TARGET_RATIO}
+    return result
+
+
+def ctypes_floor_us(calls):
+    """Per-call time of a trivial C function through ctypes: what no binary can go below."""
+    libc = ctypes.CDLL(None)
+    function = libc.labs
+    function.argtypes, function.restype = [ctypes.c_long], ctypes.c_long
+    started = time.thread_time()
+    for _ in range(calls):
+        function(1)
+    return (time.thread_time() - started) / calls * 1e6
+
+
+def model_do_step_us(repeats, calls):
+    """CPU time of WheelController's own ``do_step`` called in Python (no FMI), per call."""
+    module = next(m for name, m in sys.modules.items()
+                  if name.startswith("_sonotrack_wheelcontroller_") and name.endswith("._fmu_entry"))
+    slave = module.WheelController(instance_name="direct", resources=None)
+    slave.exit_initialization_mode()
+    slave.v_ref, slave.v_meas = 0.3, 0.1
+    times = []
+    k = 0
+    for _ in range(repeats):
+        started = time.thread_time()
+        for i in range(k, k + calls):
+            slave.do_step(i * 0.005, 0.005)
+        times.append((time.thread_time() - started) / calls)
+        k += calls
+    return median(times) * 1e6
+
+
+_SCENARIO = textwrap.dedent('''
+    import json, sys
+    from orchestrator.run import run_scenario
+    import time
+    started = time.process_time()
+    result = run_scenario(sys.argv[1], sys.argv[2], progress=False, fmu_dir=sys.argv[3],
+                          plots=False)
+    print(json.dumps({"wall_time_s": result.summary["wall_time_s"],
+                      "cpu_s": time.process_time() - started,
+                      "steps": result.summary["steps"]}), flush=True)
+''')
+
+
+def scenario_times(paths, runs, out):
+    """Stepping time of the default scenario with each binary, fresh process per run."""
+    import shutil
+
+    scenario = ROOT / "scenarios" / "s_curve.toml"
+    dirs = {}
+    for label in ("ours", "pythonfmu"):
+        folder = Path(paths[label]["WheelController"]).parent
+        shutil.copy(ROOT / "fmus" / "SystemStructure.ssd", folder / "SystemStructure.ssd")
+        dirs[label] = folder
+    times = {"ours": [], "pythonfmu": []}
+    cpu = {"ours": [], "pythonfmu": []}
+    ratios, cpu_ratios = [], []
+    exits = {"ours": [], "pythonfmu": []}
+    for r in range(runs):
+        order = ("ours", "pythonfmu") if r % 2 == 0 else ("pythonfmu", "ours")
+        pair = {}
+        for label in order:
+            completed = subprocess.run(
+                [sys.executable, "-c", _SCENARIO, str(scenario), str(out / f"{label}_{r}"),
+                 str(dirs[label])], capture_output=True, text=True, cwd=str(ROOT), timeout=1800)
+            lines = [line for line in completed.stdout.splitlines() if line.startswith("{")]
+            if not lines:
+                raise RuntimeError(f"{label} run failed: {completed.stderr[-2000:]}")
+            exits[label].append(completed.returncode)
+            record = json.loads(lines[-1])
+            pair[label] = record
+            times[label].append(record["wall_time_s"])
+            cpu[label].append(record["cpu_s"])
+        ratios.append(pair["ours"]["wall_time_s"] / pair["pythonfmu"]["wall_time_s"])
+        cpu_ratios.append(pair["ours"]["cpu_s"] / pair["pythonfmu"]["cpu_s"])
+    return {"stepping_wall_ours_s": median(times["ours"]),
+            "stepping_wall_pythonfmu_s": median(times["pythonfmu"]),
+            "wall_ratio_median_of_pairs": median(ratios),
+            "run_cpu_ours_s": median(cpu["ours"]), "run_cpu_pythonfmu_s": median(cpu["pythonfmu"]),
+            "cpu_ratio_median_of_pairs": median(cpu_ratios), "runs": runs,
+            "process_exit_status": exits}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=21)
+    parser.add_argument("--calls", type=int, default=5000)
+    parser.add_argument("--scenario-runs", type=int, default=3)
+    args = parser.parse_args(argv)
+
+    sys.path.insert(0, str(ROOT))
+    from tests.integration.fmu_checks import instantiate_free_cycles
+
+    out = Path(tempfile.mkdtemp(prefix="sonotrack_fmi_cost_"))
+    paths = build_both(NAMES, out)
+    costs = call_costs(paths, args.repeats, args.calls)
+    floor = ctypes_floor_us(args.calls)
+    model_us = model_do_step_us(args.repeats, max(1, args.calls // 10))
+    step = costs["doStep"]
+    step["model_do_step_us"] = model_us
+    step["overhead_ours_us"] = step["ours_us"] - model_us
+    step["overhead_pythonfmu_us"] = step["pythonfmu_us"] - model_us
+    step["overhead_ratio"] = step["overhead_ours_us"] / step["overhead_pythonfmu_us"]
+    for name, row in costs.items():
+        print(f"{name:11s} ours {row['ours_us']:7.2f} us  pythonfmu {row['pythonfmu_us']:7.2f} us"
+              f"  ratio {row['ratio_median_of_pairs']:.3f}"
+              f"  ({'met' if row['target_met'] else 'NOT met'}: <= {TARGET_RATIO})")
+    print(f"doStep: the model's own do_step {model_us:.2f} us; binary overhead ours "
+          f"{step['overhead_ours_us']:.2f} us, pythonfmu {step['overhead_pythonfmu_us']:.2f} us, "
+          f"ratio {step['overhead_ratio']:.3f}")
+    print(f"ctypes floor (a trivial C call from Python): {floor:.2f} us")
+    scenario = scenario_times(paths, args.scenario_runs, out)
+    print(f"default scenario stepping (wall): ours {scenario['stepping_wall_ours_s']:.2f} s, "
+          f"pythonfmu {scenario['stepping_wall_pythonfmu_s']:.2f} s, ratio "
+          f"{scenario['wall_ratio_median_of_pairs']:.3f}; run CPU: ours "
+          f"{scenario['run_cpu_ours_s']:.2f} s, pythonfmu {scenario['run_cpu_pythonfmu_s']:.2f} s, "
+          f"ratio {scenario['cpu_ratio_median_of_pairs']:.3f}; exit statuses "
+          f"{scenario['process_exit_status']}")
+    cycles = instantiate_free_cycles(paths["ours"]["WheelController"], 500)
+    print(f"500 instantiate/free cycles: RSS +{cycles['rss_growth_kib']} KiB, sys.path unchanged "
+          f"{cycles['path_unchanged']}, modules added {cycles['modules_added']}")
+    path = write_result("fmi_call_cost", {
+        "description": "FMI call cost through sonotrack's binary vs pythonfmu 0.7.0's on "
+                       "WheelController, raw ctypes calls from one Python process, interleaved "
+                       "batches; default scenario stepping time with each binary",
+        "target_ratio": TARGET_RATIO,
+        "calls": costs,
+        "ctypes_floor_us": floor,
+        "default_scenario": scenario,
+        "instantiate_free_500": cycles,
+        "command": "python benchmarks/fmi_call_cost.py " + " ".join(argv or sys.argv[1:]),
+    })
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
