@@ -1,0 +1,47 @@
+"""The ``sonotrack reproduce`` sub-command: arguments in, :func:`reproduce` called."""
+
+__all__ = ["register_cli"]
+
+
+def register_cli(subparsers):
+    """Add the ``reproduce`` sub-command to an ``argparse`` sub-parser set.
+
+    ``sonotrack reproduce [--out DIR] [--runs N] [--seed S] [--tables T,...] [--workers N]
+    [--scheduler ADDRESS] [--fmu-dir DIR] [--quiet]`` runs the study and prints the verdict
+    counts and the report's (relative) path.
+    """
+    from .experiments import TABLES
+    from .study import RUNS_PER_CELL
+
+    parser = subparsers.add_parser(
+        "reproduce", help="the paper's experiments as a Monte Carlo study beside its numbers")
+    parser.add_argument("--out", default="runs/reproduce",
+                        help="report folder (default: runs/reproduce)")
+    parser.add_argument("--runs", type=int, default=RUNS_PER_CELL,
+                        help=f"Monte Carlo runs per cell (default {RUNS_PER_CELL})")
+    parser.add_argument("--seed", type=int, default=0, help="study seed of the draws (default 0)")
+    parser.add_argument("--tables", help=f"comma-separated subset of {','.join(TABLES)}")
+    parser.add_argument("--workers", type=int, help="local Dask worker processes (default: CPUs)")
+    parser.add_argument("--scheduler", help="Dask scheduler address (default: a LocalCluster)")
+    parser.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=_cmd_reproduce)
+    return parser
+
+
+def _cmd_reproduce(args):
+    from .study import reproduce
+
+    tables = ([t.strip() for t in args.tables.split(",") if t.strip()]
+              if args.tables else None)
+    report = reproduce(args.out, fmu_dir=args.fmu_dir, workers=args.workers,
+                       progress=not args.quiet, tables=tables, runs=args.runs,
+                       study_seed=args.seed, scheduler=args.scheduler)
+    counts = ", ".join(f"{v} {k}" for k, v in sorted(report.verdict_counts().items()))
+    print(f"reproduce: {report.settings['runs_total']} runs "
+          f"({report.settings['runs_computed']} computed) in "
+          f"{report.settings['wall_time_s']:.0f} s; claims: {counts or 'none'}")
+    for path in (report.markdown_path, report.html_path, report.json_path):
+        if path is not None:
+            print(f"report: {path}")
+    return 0

@@ -1,0 +1,315 @@
+"""The paper's figures of Secs. 3.6, 4.2 and 6.2 from the simulated runs, named after them.
+
+Each PNG (``figures/figNN_<what>.png``) shows the same quantities and axes as the paper's
+figure, from every Monte Carlo run of the cells it needs: paths as thin lines per run, time
+series as a mean with its 95 % interval. Where two controllers or modes would lie on top of
+each other, a panel shows their paired difference instead. :func:`write_figures` returns a
+:class:`~orchestrator.reproduce.report.Figure` per file with the series it drew.
+"""
+
+import numpy as np
+
+from orchestrator.geometry import distance_to_path
+
+from .analysis import CASE_TARGETS, reference_path
+from .plotting import COLOURS, band, paths, pyplot, save, traces
+from .report import Figure
+
+__all__ = ["write_figures"]
+
+_LABEL = {"pid": "CPID", "fgs_pd": "CFGS-PD", "curvature": "curvature",
+          "rotate_then_go": "rotate then go (without curvature)"}
+
+
+def _axes_xy(ax, title):
+    ax.set(title=title, xlabel="x [m] (right)", ylabel="y [m] (forward)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+
+
+def _deviation(reference):
+    return lambda run: distance_to_path(run.xy(), reference)
+
+
+def _sec62_compare(study, out, path, number):
+    """Figs. 7-8: curvature vs rotate-then-go on the straight / S-curve path."""
+    plt = pyplot()
+    cells = {m: study.of(f"sec62_{path}_{m}_fgs_pd") for m in ("curvature", "rotate_then_go")}
+    if not any(cells.values()):
+        return None
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 5.5))
+    source_runs = cells["curvature"] or cells["rotate_then_go"]
+    paths(a, source_runs[:1], COLOURS["source"], "source path", alpha=1.0, source=True)
+    for mode, runs in cells.items():
+        paths(a, runs, COLOURS[mode], _LABEL[mode])
+    _axes_xy(a, f"Fig. {number}: {path.replace('_', '-')} path, with and without curvature")
+    reference = source_runs[0].source_xy() if source_runs and source_runs[0].ok else None
+    series = ["source path"] + [_LABEL[m] for m in cells]
+    if reference is not None:
+        for mode, runs in cells.items():
+            ref = np.vstack([[0.0, 0.0], reference])
+            t, m = traces(runs, None, _deviation(ref))
+            band(b, t, m, _LABEL[mode], COLOURS[mode])
+    b.set(title="distance from the source's path (robot start -> source start -> path)",
+          xlabel="time [s]", ylabel="distance [m]")
+    b.grid(True, alpha=0.3)
+    b.legend(fontsize=7)
+    name = f"fig{number:02d}_{'straight' if path == 'straight' else 'scurve'}_curvature.png"
+    return Figure(f"Fig. {number}", f"{path} source path: curvature planner vs rotate then go "
+                  "(CFGS-PD); right: distance from the source's path, mean and 95 % interval",
+                  save(fig, out / name), series)
+
+
+def _tracking(study, out, case, number, condition="ff_on_mu_nominal"):
+    """Figs. 13 / 15: paths of CPID and CFGS-PD, deviation from the ideal and its difference."""
+    plt = pyplot()
+    cells = {c: study.of(f"t89_{case}_{c}_{condition}") for c in ("pid", "fgs_pd")}
+    if not any(cells.values()):
+        return None
+    reference = reference_path({"case": case})
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(15, 5))
+    a.plot(*reference.T, "k--", lw=1, label="ideal arc(s)")
+    targets = np.array(CASE_TARGETS[case])
+    a.plot(*targets.T, "g*", ms=12, label="source / target(s)")
+    for control, runs in cells.items():
+        paths(a, runs, COLOURS[control], _LABEL[control])
+    _axes_xy(a, f"Fig. {number}: curvature tracking, Case {1 if case == 'static' else 2} "
+             f"({case})")
+    deviation = {}
+    for control, runs in cells.items():
+        t, m = traces(runs, None, _deviation(reference))
+        band(b, t, m, _LABEL[control], COLOURS[control])
+        deviation[control] = (t, m)
+    b.set(title="distance from the ideal path", xlabel="time [s]", ylabel="distance [m]")
+    b.grid(True, alpha=0.3)
+    b.legend(fontsize=7)
+    (t1, m1), (_, m2) = deviation["fgs_pd"], deviation["pid"]
+    n = min(m1.shape[0], m2.shape[0])
+    k = min(m1.shape[1] if m1.size else 0, m2.shape[1] if m2.size else 0)
+    if n and k:
+        band(c, t1[:k], m1[:n, :k] - m2[:n, :k], "CFGS-PD - CPID (paired)", "tab:purple")
+    c.axhline(0.0, color="k", lw=0.8)
+    c.set(title="paired difference of the distance from the ideal path",
+          xlabel="time [s]", ylabel="difference [m]")
+    c.grid(True, alpha=0.3)
+    c.legend(fontsize=7)
+    name = f"fig{number:02d}_{case}_tracking.png"
+    return Figure(f"Fig. {number}", f"Case {case}: paths of CPID and CFGS-PD (feedforward on, "
+                  "mu 0.8), their distance from the ideal path and its paired difference",
+                  save(fig, out / name),
+                  ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"])
+
+
+def _wheel(study, out, cells, number, title, name, slip_cells=None):
+    """Left-wheel velocity profiles, one panel per controller, plus error (and slip)."""
+    plt = pyplot()
+    cells = {k: v for k, v in cells.items() if v}
+    if not cells:
+        return None
+    rows = len(cells) + 1 + (1 if slip_cells else 0)
+    fig, axes = plt.subplots(rows, 1, figsize=(10, 2.6 * rows), sharex=True)
+    series = []
+    for ax, (control, runs) in zip(axes, cells.items()):
+        t, ref = traces(runs, "planner.v_ref_left")
+        band(ax, t, ref, "reference v_ref_left", "k", "--")
+        t, speed = traces(runs, "plant.rim_speed_left")
+        band(ax, t, speed, f"{_LABEL[control]} left rim speed", COLOURS[control])
+        ax.set(title=f"{_LABEL[control]}: left wheel", ylabel="speed [m/s]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+        series.append(_LABEL[control])
+    error_ax = axes[len(cells)]
+    for control, runs in cells.items():
+        t, m = traces(runs, None, lambda r: r.data["planner.v_ref_left"]
+                      - r.data["plant.rim_speed_left"])
+        band(error_ax, t, m, f"{_LABEL[control]} v_ref - rim speed", COLOURS[control])
+    error_ax.axhline(0.0, color="k", lw=0.6)
+    error_ax.set(title="left-wheel speed error", ylabel="error [m/s]")
+    error_ax.grid(True, alpha=0.3)
+    error_ax.legend(fontsize=7)
+    if slip_cells:
+        slip_ax = axes[-1]
+        for control, runs in slip_cells.items():
+            t, m = traces(runs, "plant.slip_left")
+            band(slip_ax, t, m, f"{_LABEL[control]} left slip ratio", COLOURS[control])
+        slip_ax.set(title="left-wheel longitudinal slip ratio", ylabel="slip ratio [1]")
+        slip_ax.grid(True, alpha=0.3)
+        slip_ax.legend(fontsize=7)
+        series.append("slip")
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"Fig. {number}: {title}")
+    return Figure(f"Fig. {number}", title + " (mean and 95 % interval over the runs)",
+                  save(fig, out / name), series)
+
+
+def _comparison(analysis, out):
+    """Fig. 17: final error and path RMSE of both cases, controllers and conditions."""
+    plt = pyplot()
+    conditions = [("ff_on", "mu_nominal"), ("ff_off", "mu_nominal"), ("ff_on", "mu_low"),
+                  ("ff_off", "mu_low")]
+    if not analysis.has("t89_static_pid_ff_on_mu_nominal"):
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(14, 5))
+    for ax, key, title in ((axes[0], "error_m", "final error [m]"),
+                           (axes[1], "rmse_path_m", "path RMSE [m]")):
+        labels, x = [], 0
+        for case in ("static", "dynamic"):
+            for ff, mu in conditions:
+                for offset, control in ((-0.18, "pid"), (0.18, "fgs_pd")):
+                    e = analysis.estimate(f"t89_{case}_{control}_{ff}_{mu}", key)
+                    if e.n:
+                        err = [[e.mean - e.low], [e.high - e.mean]] if e.n > 1 else None
+                        ax.errorbar(x + offset, e.mean, yerr=err, fmt="o",
+                                    color=COLOURS[control], capsize=3,
+                                    label=_LABEL[control] if x == 0 else None)
+                labels.append(f"{case}\n{ff.replace('_', ' ')}\n{mu.replace('mu_', 'mu ')}")
+                x += 1
+        ax.set_xticks(range(len(labels)), labels, fontsize=7)
+        ax.set(title=f"Fig. 17: {title}, mean and 95 % interval", ylabel=title)
+        ax.set_yscale("log")
+        ax.grid(True, alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+    return Figure("Fig. 17", "static and dynamic curvature tracking: final error and path "
+                  "RMSE by controller, feedforward and friction (log scale)",
+                  save(fig, out / "fig17_static_dynamic_comparison.png"), ["CPID", "CFGS-PD"])
+
+
+def _relative(run):
+    """True and estimated source position in the robot frame (x right, y forward, theta)."""
+    d = run.data
+    dx, dy = d["source.x"] - d["plant.x"], d["source.y"] - d["plant.y"]
+    psi = d["plant.heading"]
+    forward = dx * np.cos(psi) + dy * np.sin(psi)
+    right = dx * np.sin(psi) - dy * np.cos(psi)
+    valid = d["localizer.valid"] > 0.5
+    distance, bearing = d["localizer.distance"], d["localizer.bearing"]
+    return {"true": (right, forward, np.degrees(np.arctan2(right, forward)),
+                     np.hypot(right, forward)),
+            "heard": (-distance * np.sin(bearing), distance * np.cos(bearing),
+                      -np.degrees(bearing), distance),
+            "valid": valid}
+
+
+def _estimates(study, out, path, number, name, which):
+    """Figs. 25 / 29 (x, y, theta) and 26 / 30 (distance, angle) of the heard source."""
+    plt = pyplot()
+    runs = [r for r in study.of(f"sec62_{path}_curvature_fgs_pd") if r.ok]
+    if not runs:
+        return None
+    run = runs[0]
+    rel = _relative(run)
+    t, valid = run.data["time"], rel["valid"]
+    panels = ([(0, "x (right) [m]"), (1, "y (forward) [m]"), (2, "theta (right +) [deg]")]
+              if which == "xyt" else [(3, "distance [m]"), (2, "angle (right +) [deg]")])
+    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 2.8 * len(panels)), sharex=True)
+    for ax, (index, label) in zip(axes, panels):
+        ax.plot(t, rel["true"][index], color="k", lw=1.2, label="true (from the poses)")
+        ax.plot(t[valid], rel["heard"][index][valid], ".", ms=3, color="tab:blue",
+                label="heard (localizer fix)")
+        error = rel["heard"][index][valid] - rel["true"][index][valid]
+        if len(error):
+            ax.set_title(f"{label.split(' [')[0]}: heard - true median "
+                         f"{np.median(error):+.3g}, RMS {np.sqrt(np.mean(error ** 2)):.3g}",
+                         fontsize=9)
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel("time [s]")
+    what = "estimated source x, y, theta" if which == "xyt" else "distance and angle"
+    fig.suptitle(f"Fig. {number}: {what}, {path} path (run 1 of {len(runs)}), robot frame")
+    return Figure(f"Fig. {number}", f"{path} path: {what} of the source relative to the robot, "
+                  "heard vs true (first run; the tables hold all runs)",
+                  save(fig, out / name), ["true", "heard"])
+
+
+def _sec62_tracking(study, out, path, number, name, bounds):
+    """Figs. 23 / 27: source and robot paths (start, mute point) and the gap over time."""
+    plt = pyplot()
+    runs = study.of(f"sec62_{path}_curvature_fgs_pd")
+    if not runs:
+        return None
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 6))
+    paths(a, runs[:1], COLOURS["source"], "source (master) path", alpha=1.0, source=True)
+    paths(a, runs, COLOURS["fgs_pd"], "robot (slave), curvature, CFGS-PD")
+    first = runs[0]
+    if first.ok:
+        emitting = first.data["source.emitting"] > 0.5
+        silent = np.nonzero(~emitting)[0]
+        if len(silent):
+            a.plot(*first.source_xy()[silent[0]], "rx", ms=10, mew=2, label="source mutes")
+        a.plot(0.0, 0.0, "ks", label="robot start")
+        a.plot(*first.source_xy()[0], "g^", label="source start (45 deg right)")
+    _axes_xy(a, f"Fig. {number}: {path} path tracking")
+    t, gap = traces(runs, None, lambda r: np.hypot(*(r.xy() - r.source_xy()).T))
+    band(b, t, gap, "gap robot - source", "tab:blue")
+    b.axhline(bounds["max_gap_m"], color="tab:red", ls="--", label="largest-gap bound")
+    b.axhline(0.35, color="k", ls=":", label="body length (collision)")
+    b.set(title="gap between the robots", xlabel="time [s]", ylabel="gap [m]")
+    b.grid(True, alpha=0.3)
+    b.legend(fontsize=7)
+    return Figure(f"Fig. {number}", f"{path} path: the robot follows the source (every run) "
+                  "and the gap over time with the test's bounds", save(fig, out / name),
+                  ["source", "robot", "gap"])
+
+
+def _speed_trends(analysis, out, speeds):
+    """Tables 1-3 over speed: error, fitted radius, path RMSE; means with intervals."""
+    plt = pyplot()
+    if not speeds or not analysis.has(f"t13_v{speeds[0]:g}_curvature"):
+        return None
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    for ax, key, title in ((axes[0], "error_m", "final error [m]"),
+                           (axes[1], "radius_fit_m", "radius driven [m]"),
+                           (axes[2], "rmse_path_m", "path RMSE [m]")):
+        for offset, mode in ((-0.004, "rotate_then_go"), (0.004, "curvature")):
+            if key == "radius_fit_m" and mode == "rotate_then_go":
+                continue
+            estimates = [analysis.estimate(f"t13_v{s:g}_{mode}", key) for s in speeds]
+            ok = [(s, e) for s, e in zip(speeds, estimates) if e.n]
+            if ok:
+                ax.errorbar([s + offset for s, _ in ok], [e.mean for _, e in ok],
+                            yerr=[[e.mean - e.low if e.n > 1 else 0 for _, e in ok],
+                                  [e.high - e.mean if e.n > 1 else 0 for _, e in ok]],
+                            fmt="o-", capsize=3, color=COLOURS[mode], label=_LABEL[mode])
+        ax.set(title=f"Tables 1-3: {title} over speed", xlabel="v [m/s]", ylabel=title)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    return Figure("Tables 1-3", "final error, driven radius and path RMSE over the speed "
+                  "(mean and 95 % interval)", save(fig, out / "table1_3_speed_trends.png"),
+                  [_LABEL["rotate_then_go"], _LABEL["curvature"]])
+
+
+def write_figures(study, analysis, out_dir, speeds, bounds):
+    """Write every figure the study's cells allow; returns the Figure records written."""
+    out = out_dir / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    nominal = "ff_on_mu_nominal"
+    figures = [
+        _speed_trends(analysis, out, speeds),
+        _sec62_compare(study, out, "straight", 7), _sec62_compare(study, out, "s_curve", 8),
+        _tracking(study, out, "static", 13),
+        _wheel(study, out, {c: study.of(f"t89_static_{c}_{nominal}") for c in ("pid", "fgs_pd")},
+               14, "left-wheel velocity profile, Case 1 (static)", "fig14_static_left_wheel.png",
+               {c: study.of(f"t89_static_{c}_ff_on_mu_low") for c in ("pid", "fgs_pd")}),
+        _tracking(study, out, "dynamic", 15),
+        _wheel(study, out, {c: study.of(f"t89_dynamic_{c}_{nominal}") for c in ("pid", "fgs_pd")},
+               16, "left-wheel velocity profile, Case 2 (dynamic)",
+               "fig16_dynamic_left_wheel.png",
+               {c: study.of(f"t89_dynamic_{c}_ff_on_mu_low") for c in ("pid", "fgs_pd")}),
+        _comparison(analysis, out),
+    ]
+    for path, base, tag in (("straight", 23, "straight"), ("s_curve", 27, "scurve")):
+        cells = {c: study.of(f"sec62_{path}_curvature_{c}") for c in ("pid", "fgs_pd")}
+        figures += [
+            _sec62_tracking(study, out, path, base, f"fig{base}_{tag}_tracking.png", bounds),
+            _wheel(study, out, cells, base + 1, f"left-wheel velocity profile, {path} path",
+                   f"fig{base + 1}_{tag}_left_wheel.png", cells),
+            _estimates(study, out, path, base + 2, f"fig{base + 2}_{tag}_estimates.png", "xyt"),
+            _estimates(study, out, path, base + 3, f"fig{base + 3}_{tag}_distance_angle.png",
+                       "da")]
+    written = [f for f in figures if f is not None]
+    for figure in written:
+        figure.path = f"figures/{figure.path.name}"
+    return written
+

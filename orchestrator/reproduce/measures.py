@@ -1,0 +1,188 @@
+"""Per-run figures: what each table row measures, from one run's recorded traces.
+
+Every function takes a :class:`~orchestrator.reproduce.runs.RunRecord` and returns a dict of
+plain numbers (None where the run cannot give one, e.g. a robot that did not settle).
+The definitions are in :data:`DEFINITIONS` and printed in the report.
+"""
+
+import math
+
+import numpy as np
+
+from orchestrator.geometry import (apex_offsets, arrival_time, circle_fit_radius,
+                                   path_length, path_rmse)
+
+__all__ = ["DEFINITIONS", "ENCODER_PPR", "NOMINAL_WHEEL_RADIUS", "SLIP_THRESHOLD",
+           "arrival_figures", "slip_figures", "wheel_profile", "tracking_figures",
+           "first_heading_change"]
+
+ENCODER_PPR = 728               # counts per wheel revolution (DESIGN.md)
+NOMINAL_WHEEL_RADIUS = 0.06     # m; the robot's own conversion of counts to distance
+# A wheel "slips" while |slip ratio| exceeds 5 %: well above the 0.7-1.2 % peak of the rolling
+# contact at mu >= 0.1 (measured), well below a spinning wheel (slip ratio ~ 1).
+SLIP_THRESHOLD = 0.05
+
+DEFINITIONS = {
+    "distance_m": "length of the robot's true path (sum of distances between 20 ms samples "
+                  "of plant.x, plant.y), the whole run",
+    "error_m": "distance from the robot's true centre to the (final) source position at the "
+               "end of the run",
+    "arrival_s": "time from t = 0 until the robot's true pose stays within 5 mm and 0.01 rad "
+                 "of its final pose, for at least the last 1 s of the run (else missing)",
+    "radius_planner_m": "planner.radius at the first accepted fix (Eq. 36 from the heard "
+                        "distance and bearing)",
+    "radius_fit_m": "radius of the least-squares circle (Kasa fit) through the robot's true "
+                    "path while moving: the radius actually driven",
+    "rmse_path_m": "RMS distance of the true path, resampled every 5 mm of arc length, from the "
+                   "ideal path of the mode (segment for rotate-then-go; tangent arc(s) through "
+                   "the target(s) for curvature)",
+    "rmse_speed_m_s": "RMS of (planner wheel reference - true rim speed), both wheels, while "
+                      "the robot moves",
+    "turn_error_deg": "|true heading change before the centre first moves 5 mm + 45 deg|: the "
+                      "error of rotate-then-go's turn on the spot towards the target",
+    "peak_slip": "largest |longitudinal slip ratio| of either wheel over the run",
+    "slip_time_s": f"time during which either wheel's |slip ratio| > {SLIP_THRESHOLD}",
+    "cruise_m_s": "median true rim speed while the planner's wheel reference is within 1 % of "
+                  "its plateau in that segment",
+    "ramp_m_s2": "least-squares slope of the true rim speed while the wheel reference ramps "
+                 "up from 10 % to 90 % of its plateau (first ramp of the segment)",
+    "encoder_m": "encoder counts of the segment x 2 pi r / 728 with the nominal r = 0.06 m "
+                 "(the robot's own odometry)",
+    "gap_m": "distance between the robot's and the source's true centres",
+    "rmse_source_path_m": "RMS distance of the robot's true path (5 mm arc-length samples) from "
+                          "the reference robot start -> source start -> source path",
+    "inward_offset_m": "at each apex of the source's S-curve, the source's lateral offset minus "
+                       "the robot's at the same forward coordinate, signed towards the curve's "
+                       "centre (> 0: the robot runs inside); the smaller of the two apexes",
+}
+
+
+def first_heading_change(xy, heading, moved=0.005):
+    """True heading change [deg] before the centre first moves 5 mm (a turn on the spot)."""
+    away = np.nonzero(np.hypot(*(xy - xy[0]).T) > moved)[0]
+    if len(away) == 0:
+        return None
+    turned = np.unwrap(np.asarray(heading, dtype=float))
+    return float(np.degrees(turned[away[0]] - turned[0]))
+
+
+def slip_figures(run):
+    """Peak |slip ratio| and the time either wheel slips (``SLIP_THRESHOLD``)."""
+    data = run.data
+    slip = np.maximum(np.abs(data["plant.slip_left"]), np.abs(data["plant.slip_right"]))
+    dt = float(np.median(np.diff(data["time"]))) if len(data["time"]) > 1 else 0.0
+    return {"peak_slip": float(slip.max()),
+            "slip_time_s": float(np.count_nonzero(slip > SLIP_THRESHOLD) * dt)}
+
+
+def arrival_figures(run, reference):
+    """Tables 1-3 and 8-9: distance, final error, arrival, path RMSE, radii, turn, slip."""
+    data, xy = run.data, run.xy()
+    source = run.source_xy()
+    moving = np.hypot(*(xy - xy[0]).T) > 1e-3
+    radius = data["planner.radius"]
+    first_fix = np.nonzero((radius > 0) & (radius < 1e5))[0]
+    speed_error = np.concatenate([
+        (data["planner.v_ref_left"] - data["plant.rim_speed_left"])[moving],
+        (data["planner.v_ref_right"] - data["plant.rim_speed_right"])[moving]])
+    turn = first_heading_change(xy, data["plant.heading"])
+    return {
+        "distance_m": path_length(xy),
+        "error_m": float(np.hypot(*(xy[-1] - source[-1]))),
+        "arrival_s": arrival_time(data["time"], xy, data["plant.heading"]),
+        "rmse_path_m": path_rmse(xy, reference),
+        "rmse_speed_m_s": (float(np.sqrt(np.mean(speed_error ** 2)))
+                           if len(speed_error) else None),
+        "radius_planner_m": float(radius[first_fix[0]]) if len(first_fix) else None,
+        "radius_fit_m": (circle_fit_radius(xy[moving]) if moving.sum() >= 3 else None),
+        "turn_deg": turn,
+        "turn_error_deg": None if turn is None else abs(turn + 45.0),
+        **slip_figures(run),
+    }
+
+
+def _segment_bounds(run, segments):
+    """Sample ranges of the arcs: one, or split where the planned curvature changes sign."""
+    n = len(run.data["time"])
+    if segments == 1:
+        return [(0, n)]
+    curvature = run.data["planner.curvature"]
+    turned = np.nonzero(curvature > 1e-6)[0]         # segment 2 turns left (Case 2)
+    if len(turned) == 0:
+        return [(0, n), (n, n)]
+    return [(0, int(turned[0])), (int(turned[0]), n)]
+
+
+def _ramp_slope(time, reference, speed):
+    plateau = float(np.max(reference)) if len(reference) else 0.0
+    if plateau <= 0.0:
+        return None
+    rising = np.nonzero(reference >= 0.1 * plateau)[0]
+    if len(rising) == 0:
+        return None
+    start = int(rising[0])
+    top = np.nonzero(reference[start:] >= 0.9 * plateau)[0]
+    if len(top) == 0:
+        return None
+    stop = start + int(top[0]) + 1
+    if stop - start < 3:
+        return None
+    return float(np.polyfit(time[start:stop], speed[start:stop], 1)[0])
+
+
+def wheel_profile(run, segments=1):
+    """Tables 6-7 from the simulated wheels: cruise speed, ramp acceleration, encoder distance.
+
+    Returns
+    -------
+    list of dict
+        One per segment, keys ``{left,right}_{cruise_m_s,ramp_m_s2,encoder_m}``.
+    """
+    data, time = run.data, run.data["time"]
+    per_count = 2.0 * math.pi * NOMINAL_WHEEL_RADIUS / ENCODER_PPR
+    profiles = []
+    for start, stop in _segment_bounds(run, segments):
+        figures = {}
+        for side in ("left", "right"):
+            reference = data[f"planner.v_ref_{side}"][start:stop]
+            speed = data[f"plant.rim_speed_{side}"][start:stop]
+            counts = data[f"plant.encoder_{side}"]
+            if stop - start < 3:
+                figures.update({f"{side}_cruise_m_s": None, f"{side}_ramp_m_s2": None,
+                                f"{side}_encoder_m": None})
+                continue
+            plateau = float(np.max(reference))
+            cruising = np.abs(reference - plateau) <= 0.01 * max(plateau, 1e-9)
+            figures[f"{side}_cruise_m_s"] = (float(np.median(speed[cruising]))
+                                             if cruising.any() and plateau > 0 else None)
+            figures[f"{side}_ramp_m_s2"] = _ramp_slope(time[start:stop], reference, speed)
+            last = min(stop, len(counts)) - 1
+            figures[f"{side}_encoder_m"] = float((counts[last] - counts[start]) * per_count)
+        profiles.append(figures)
+    return profiles
+
+
+def tracking_figures(run, stop_distance):
+    """Sec. 6.2: gaps, path RMSE from the source's path, mute time, apexes, slip."""
+    data, xy = run.data, run.xy()
+    source = run.source_xy()
+    gap = np.hypot(*(xy - source).T)
+    emitting = data["source.emitting"] > 0.5
+    silent = np.nonzero(~emitting)[0]
+    mute = float(data["time"][silent[0]]) if len(silent) else None
+    stays_silent = bool(len(silent)) and not emitting[silent[0]:].any()
+    reference = np.vstack([xy[:1], source])
+    apexes = apex_offsets(source, xy)
+    offsets = [a["inward_offset_m"] for a in apexes]
+    return {
+        "final_gap_m": float(gap[-1]),
+        "final_gap_error_m": float(abs(gap[-1] - stop_distance)),
+        "max_gap_m": float(gap.max()),
+        "min_gap_m": float(gap.min()),
+        "rmse_source_path_m": path_rmse(xy, reference),
+        "mute_s": mute,
+        "stays_silent": 1.0 if stays_silent else 0.0,
+        "arrival_s": arrival_time(data["time"], xy, data["plant.heading"]),
+        "inward_offset_m": (min(offsets) if offsets and None not in offsets else None),
+        **slip_figures(run),
+    }

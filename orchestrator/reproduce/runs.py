@@ -1,0 +1,166 @@
+"""Running the study's cells through the sweep machinery and reading the runs back.
+
+Every run of the study (each cell of each
+:class:`~orchestrator.reproduce.experiments.Experiment` x the Monte Carlo draws) is one
+complete scenario; all of them go to one :func:`orchestrator.sweep.run_many` call, so one
+engine (Dask, local or a cluster) and one progress bar serve the whole study. Finished runs
+are stored by the hash of everything they read, so a second call (or a call after an
+interruption) recomputes nothing that is on disk.
+"""
+
+import csv
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .tolerances import monte_carlo_points
+
+__all__ = ["RunRecord", "StudyRuns", "run_study", "read_results"]
+
+
+@dataclass
+class RunRecord:
+    """One finished (or failed) run of a cell."""
+
+    cell: str
+    index: int
+    summary: dict
+    data: dict
+    run_dir: str
+    parameters: dict = field(default_factory=dict)
+
+    @property
+    def ok(self):
+        """True if the run finished and recorded at least two rows."""
+        return self.summary.get("status") == "ok" and len(self.data.get("time", ())) > 1
+
+    def xy(self):
+        """True robot centre positions, ``(n, 2)``."""
+        return np.column_stack([self.data["plant.x"], self.data["plant.y"]])
+
+    def source_xy(self):
+        """True source positions, ``(n, 2)``."""
+        return np.column_stack([self.data["source.x"], self.data["source.y"]])
+
+
+@dataclass
+class StudyRuns:
+    """Every run of the study by cell (lists indexed by run) and what was reused."""
+
+    cells: dict
+    computed: int = 0
+    reused: int = 0
+    out_dir: Path = None
+
+    def of(self, cell):
+        """The runs of a cell (an empty list if it was not run)."""
+        return self.cells.get(cell, [])
+
+
+def read_results(run_dir):
+    """A run's ``results.csv`` as ``{column: array}`` (Booleans as 0/1)."""
+    path = Path(run_dir) / "results.csv"
+    with open(path, newline="") as stream:
+        reader = csv.reader(stream)
+        header = next(reader)
+        rows = [[1.0 if v == "true" else 0.0 if v == "false" else float(v) for v in row]
+                for row in reader]
+    data = np.array(rows, dtype=float) if rows else np.zeros((0, len(header)))
+    return {name: data[:, i] for i, name in enumerate(header)}
+
+
+def _parameter_info(system, names):
+    """FMU default (start) and declared valid range of each ``instance.parameter``."""
+    defaults, ranges = {}, {}
+    for name in names:
+        instance, _, parameter = name.partition(".")
+        try:
+            component = system.component(instance)
+        except Exception:           # the tolerance names an unknown instance: reported later
+            continue
+        for variable in component.model_description.modelVariables:
+            if variable.name == parameter:
+                if variable.start is not None:
+                    defaults[name] = float(variable.start)
+
+                def bound(value):
+                    return None if value in (None, "") else float(value)
+                ranges[name] = (bound(getattr(variable, "min", None)),
+                                bound(getattr(variable, "max", None)))
+    return defaults, ranges
+
+
+def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None,
+              scheduler=None, progress=True, study_seed=0, stop_time_scale=1.0):
+    """Run every cell ``runs`` times (Monte Carlo draws) and read the results.
+
+    Parameters
+    ----------
+    experiments : list of Experiment
+    tolerances : list of Tolerance
+    runs : int
+        Runs per cell.
+    out_dir : path-like
+        Study folder; the sweeps go to ``<out_dir>/runs/<experiment>/``.
+    fmu_dir : path-like, optional
+        Folder of the FMUs, if not beside the ``.ssd``.
+    workers : int, optional
+        Worker processes of the local Dask cluster (default: the CPUs).
+    scheduler : str, optional
+        Address of a running Dask scheduler instead of a local cluster.
+    progress : bool
+        One progress bar over every run of the study on stderr.
+    study_seed : int
+        Seed of the draws.
+    stop_time_scale : float
+        Factor on every stop time (< 1 only for a quick reduced study, e.g. in tests).
+
+    Returns
+    -------
+    StudyRuns
+
+    Raises
+    ------
+    ConfigError
+        If a tolerance names an unknown parameter or draws outside its valid range.
+    """
+    from orchestrator.sweep import run_many
+    from orchestrator.system import load_system
+
+    out_dir = Path(out_dir)
+    scenarios, settings = [], []
+    for experiment in experiments:
+        base = experiment.base_scenario(stop_time_scale)
+        system = load_system(base.system, fmu_dir=fmu_dir)
+        defaults, ranges = _parameter_info(system, [t.parameter for t in tolerances])
+        for cell in experiment.cells:
+            points = monte_carlo_points(tolerances, defaults, cell.parameters, runs,
+                                        study_seed, ranges)
+            for index, point in enumerate(points):
+                overrides = {k: v for k, v in point.items() if k != "seed"}
+                scenarios.append(base.with_overrides(name=experiment.name, seed=point["seed"],
+                                                     parameters=overrides))
+                settings.append({"cell": cell.name, "index": index, **point})
+    result = run_many(scenarios, out_dir / "runs", settings=settings, fmu_dir=fmu_dir,
+                      scheduler=scheduler, workers=workers, progress=progress)
+    study = StudyRuns({}, computed=result.computed, reused=result.reused, out_dir=out_dir)
+    found = {(row.get("cell"), row.get("index")): row for row in result.rows}
+    for named in settings:
+        row = found.get((named["cell"], named["index"]))
+        record = (_record(named["cell"], named["index"], named, row) if row is not None
+                  else RunRecord(named["cell"], named["index"],
+                                 {"status": "missing", "error": "no row in the sweep"}, {},
+                                 "", named))
+        study.cells.setdefault(named["cell"], []).append(record)
+    return study
+
+
+def _record(cell, index, point, row):
+    run_dir = row["run_dir"]
+    summary_path = Path(run_dir) / "summary.json"
+    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else dict(row)
+    ok = summary.get("status") == "ok" and (Path(run_dir) / "results.csv").is_file()
+    data = read_results(run_dir) if ok else {}
+    return RunRecord(cell, index, summary, data, run_dir, point)

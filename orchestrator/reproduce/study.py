@@ -1,0 +1,141 @@
+"""The study's entry point: plan the cells, run them, judge the claims, write the report."""
+
+import os
+import time
+from pathlib import Path
+
+from components.common.errors import ConfigError
+
+from .analysis import Analysis
+from .experiments import PAPER_SPEEDS, TABLES, configuration, plan
+from .figures import write_figures
+from .measures import DEFINITIONS
+from .paper import load_paper_tables
+from .report import Report
+from .runs import run_study
+from .tables_motion import motion_tables, profile_tables
+from .tables_tracking import (condition_summary, controller_tables, tracking_bounds,
+                              tracking_tables)
+from .tolerances import load_tolerances
+
+__all__ = ["RUNS_PER_CELL", "check_selection", "reproduce"]
+
+RUNS_PER_CELL = 20
+
+
+def check_selection(tables, speeds):
+    """Validate a table and speed selection; returns ``(set of tables, sorted speeds)``.
+
+    Raises
+    ------
+    ConfigError
+        Naming the unknown table or speed and the valid choices.
+    """
+    if tables is None:
+        selected = set(TABLES)
+    else:
+        if isinstance(tables, str):
+            tables = [tables]
+        unknown = [t for t in tables if t not in TABLES]
+        if unknown:
+            raise ConfigError(f"tables: {', '.join(map(repr, unknown))} not known; valid "
+                              f"choices: {', '.join(TABLES)}")
+        selected = set(tables)
+    speeds = tuple(PAPER_SPEEDS if speeds is None else speeds)
+    bad = [s for s in speeds if round(float(s), 3) not in PAPER_SPEEDS]
+    if bad or not speeds:
+        raise ConfigError(f"speeds: {bad or 'empty'} not among the paper's speeds; valid "
+                          f"choices: {', '.join(f'{s:g}' for s in PAPER_SPEEDS)}")
+    return selected, tuple(sorted(round(float(s), 3) for s in set(speeds)))
+
+
+def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, speeds=None,
+              scheduler=None, runs=RUNS_PER_CELL, study_seed=0, stop_time_scale=1.0,
+              tolerances=None):
+    """Run the paper's experiments as a Monte Carlo study and write the report.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Folder for ``reproduction.{json,md,html}``, ``figures/`` and ``runs/`` (finished runs
+        are reused by input hash: a second call, or one after an interruption, resumes).
+    fmu_dir : path-like, optional
+        Folder of the FMUs, if not beside ``fmus/SystemStructure.ssd``.
+    workers : int, optional
+        Worker processes of the local Dask cluster (default: the CPUs).
+    progress : bool
+        A progress bar over every run on stderr.
+    tables : sequence of str, optional
+        Subset of :data:`TABLES` (default all).
+    speeds : sequence of float, optional
+        Subset of the paper's speeds for Tables 1-3 (default all five; a trend needs two).
+    scheduler : str, optional
+        Address of a running Dask scheduler instead of a local cluster.
+    runs : int
+        Monte Carlo runs per cell (default 20; >= 2 for an interval).
+    study_seed : int
+        Seed of the draws (physics and localizer noise).
+    stop_time_scale : float
+        Factor on every stop time; 1 for the study, less only for a quick test of the code.
+    tolerances : path-like, optional
+        Tolerance file instead of ``orchestrator/data/tolerances.toml``.
+
+    Returns
+    -------
+    Report
+
+    Raises
+    ------
+    ConfigError
+        For an unknown table or speed, bad run count, tolerance file or scenario problem.
+    """
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
+        raise ConfigError(f"runs = {runs!r}: must be an integer >= 1 (>= 2 for an interval)")
+    if not 0.0 < float(stop_time_scale) <= 1.0:
+        raise ConfigError(f"stop_time_scale = {stop_time_scale!r}: must be in (0, 1]")
+    selected, speeds = check_selection(tables, speeds)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paper = load_paper_tables()
+    tolerance_list = load_tolerances(tolerances)
+    experiments = plan(selected, speeds)
+    started = time.perf_counter()
+    study = run_study(experiments, tolerance_list, runs, out_dir, fmu_dir=fmu_dir,
+                      workers=workers, scheduler=scheduler, progress=progress,
+                      study_seed=study_seed, stop_time_scale=stop_time_scale)
+    run_seconds = time.perf_counter() - started
+    cells = {cell.name: cell for e in experiments for cell in e.cells}
+    analysis = Analysis(study, cells, runs)
+
+    report_tables, claims, ratios = {}, [], []
+    for builder in (lambda: motion_tables(analysis, selected, speeds, paper),
+                    lambda: controller_tables(analysis, selected, paper)):
+        t, c, r = builder()
+        report_tables.update(t)
+        claims += c
+        ratios += r
+    t, r = profile_tables(analysis, selected, paper)
+    report_tables.update(t)
+    ratios += r
+    if "sec6_2" in selected:
+        t, c = tracking_tables(analysis)
+        report_tables.update(t)
+        claims += c
+    summary = condition_summary(claims)
+    ordered = {name: report_tables[name] for name in TABLES if name in report_tables}
+    if summary.rows:
+        ordered = {"conditions": summary, **ordered}
+    ratios.sort(key=lambda c: int(c.table.split()[-1]))
+
+    settings = {"tables": sorted(selected, key=TABLES.index), "speeds": list(speeds),
+                "runs_per_cell": runs, "cells": len(cells), "runs_total": len(cells) * runs,
+                "runs_computed": study.computed, "runs_reused": study.reused,
+                "failed_runs": analysis.failures(), "study_seed": study_seed,
+                "stop_time_scale": stop_time_scale, "workers": workers or os.cpu_count(),
+                "scheduler": "given" if scheduler else "local",
+                "run_time_s": run_seconds}
+    report = Report(configuration(), tolerance_list, DEFINITIONS, ordered, claims, ratios,
+                    settings=settings, out_dir=out_dir)
+    report.figures = write_figures(study, analysis, out_dir, speeds, tracking_bounds())
+    report.settings["wall_time_s"] = time.perf_counter() - started
+    return report.write(out_dir)

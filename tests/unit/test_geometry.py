@@ -1,0 +1,125 @@
+"""Path geometry and run figures of orchestrator.geometry against analytic values."""
+
+import math
+
+import numpy as np
+import pytest
+
+from components.common.errors import ConfigError
+from orchestrator.geometry import (apex_offsets, arrival_time, circle_fit_radius,
+                                   path_length, path_rmse, resample_path, tangent_arc_path)
+
+
+def _arc(centre, radius, start_angle, stop_angle, count=2001):
+    angles = np.linspace(start_angle, stop_angle, count)
+    return np.column_stack([centre[0] + radius * np.cos(angles),
+                            centre[1] + radius * np.sin(angles)])
+
+
+@pytest.mark.parametrize("points, expected", [
+    (np.array([[0.0, 0.0], [3.0, 4.0]]), 5.0),
+    (np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [1.0, 2.0]]), 3.0),
+    (np.array([[1.0, 1.0]]), 0.0),
+], ids=["segment", "polyline-with-repeat", "single-point"])
+def test_path_length_of_polylines(points, expected):
+    assert path_length(points) == pytest.approx(expected, abs=1e-12)
+
+
+def test_path_length_of_a_quarter_circle():
+    quarter = _arc((1.5, 0.0), 1.5, math.pi, math.pi / 2, count=20001)
+    assert path_length(quarter) == pytest.approx(math.pi / 2 * 1.5, rel=1e-8)
+
+
+def test_resample_path_keeps_length_and_spacing():
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
+    samples = resample_path(points, 0.01)
+    steps = np.hypot(*np.diff(samples, axis=0).T)
+    assert np.allclose(steps, 0.01, atol=1e-12)
+    assert np.allclose(samples[[0, -1]], [[0.0, 0.0], [1.0, 1.0]])
+    with pytest.raises(ConfigError, match="spacing = 0"):
+        resample_path(points, 0)
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.01, 0.2], ids=["on", "1cm", "20cm"])
+def test_path_rmse_of_a_parallel_line_is_its_offset(offset):
+    reference = np.array([[0.0, 0.0], [1.5, 1.5]])
+    normal = np.array([1.0, -1.0]) / math.sqrt(2.0)
+    driven = np.linspace(reference[0], reference[1], 50) + offset * normal
+    assert path_rmse(driven, reference) == pytest.approx(offset, abs=1e-12)
+
+
+def test_path_rmse_of_a_concentric_arc_is_the_radius_difference():
+    reference = tangent_arc_path((0.0, 0.0), math.pi / 2, [(1.5, 1.5)])
+    # the ideal arc has its centre at (1.5, 0) and R = 1.5; drive one 3 cm outside it
+    driven = _arc((1.5, 0.0), 1.53, math.pi, math.pi / 2, count=5000)
+    assert path_rmse(driven, reference) == pytest.approx(0.03, abs=1e-6)
+
+
+def test_path_rmse_of_a_lateral_step_is_analytic():
+    # half the path on the line, half 2 cm off it: RMS = 0.02 / sqrt(2) (the short jump
+    # between the halves adds a few samples, well under a micrometre of RMS change)
+    reference = np.array([[0.0, 0.0], [2.0, 0.0]])
+    driven = np.vstack([np.linspace([0.0, 0.0], [1.0, 0.0], 200),
+                        np.linspace([1.0, 0.02], [2.0, 0.02], 200)])
+    expected = math.sqrt(0.02 ** 2 * 1.0 / 2.02 + (0.02 ** 2 / 3.0) * 0.02 / 2.02)
+    assert path_rmse(driven, reference, spacing=0.0005) == pytest.approx(expected, rel=1e-3)
+
+
+def test_tangent_arc_path_matches_eq36_geometry():
+    path = tangent_arc_path((0.0, 0.0), math.pi / 2, [(1.5, 1.5)])
+    # Eq. (36): R = D / (2 sin 45 deg) = 1.5 m, centre on the right of the start
+    assert np.allclose(np.hypot(path[:, 0] - 1.5, path[:, 1]), 1.5, atol=1e-12)
+    assert np.allclose(path[[0, -1]], [[0.0, 0.0], [1.5, 1.5]], atol=1e-12)
+    assert path_length(path) == pytest.approx(math.pi / 2 * 1.5, rel=1e-6)
+
+
+def test_tangent_arc_path_chains_case2_arcs():
+    p0 = (math.sqrt(0.5), math.sqrt(0.5))
+    p1 = (2 * p0[0], 2 * p0[1])
+    path = tangent_arc_path((0.0, 0.0), math.pi / 2, [p0, p1])
+    assert np.min(np.hypot(*(path - p0).T)) < 1e-12
+    assert np.allclose(path[-1], p1, atol=1e-12)
+    # two quarter circles of R = 0.707 m (the paper's Table 7 radii)
+    assert path_length(path) == pytest.approx(2 * math.pi / 2 * math.sqrt(0.5), rel=1e-6)
+
+
+def test_tangent_arc_path_straight_ahead_is_a_segment():
+    path = tangent_arc_path((0.0, 0.0), math.pi / 2, [(0.0, 2.0)])
+    assert np.allclose(path, [[0.0, 0.0], [0.0, 2.0]])
+
+
+@pytest.mark.parametrize("radius", [0.707, 1.5, 20.0])
+def test_circle_fit_radius_is_exact_on_a_circle(radius):
+    assert circle_fit_radius(_arc((3.0, -1.0), radius, 0.2, 1.4, 300)) == pytest.approx(
+        radius, rel=1e-9)
+
+
+def test_circle_fit_radius_of_a_line_is_infinite():
+    assert circle_fit_radius(np.linspace([0, 0], [1, 1], 20)) == math.inf
+
+
+def test_arrival_time_ignores_a_one_count_dither_but_sees_motion():
+    time = np.arange(0.0, 10.0, 0.02)
+    x = np.minimum(time, 5.0) * 0.3                      # drives 1.5 m, at rest from 5 s
+    xy = np.column_stack([x + 0.0002 * np.sin(40 * time) * (time > 5.0), np.zeros_like(x)])
+    heading = np.full_like(time, math.pi / 2)
+    assert arrival_time(time, xy, heading) == pytest.approx(5.0, abs=0.03)
+    # a creep of 0.02 rad/s never settles inside 0.01 rad for the last second
+    creeping = heading + 0.02 * np.maximum(time - 5.0, 0.0)
+    assert arrival_time(time, xy, creeping) is None
+    assert arrival_time(time, np.zeros((len(time), 2)), heading) == 0.0
+
+
+def test_apex_offsets_signs_inside_and_outside():
+    u = np.linspace(0.0, 6.0, 601)
+    lateral = 0.5 * np.sin(2 * math.pi * u / 6.0)        # apexes +0.5 at u=1.5, -0.5 at 4.5
+    # source along +y from (0, 1); left of +y is -x
+    source = np.column_stack([-lateral, 1.0 + u])
+    inside = np.column_stack([-0.8 * lateral, 1.0 + u])
+    offsets = apex_offsets(source, inside)
+    assert [round(a["forward_m"], 6) for a in offsets] == [1.5, 4.5]
+    assert [a["inward_offset_m"] for a in offsets] == pytest.approx([0.1, 0.1])
+    outside = apex_offsets(source, np.column_stack([-1.2 * lateral, 1.0 + u]))
+    assert [a["inward_offset_m"] for a in outside] == pytest.approx([-0.1, -0.1])
+    straight = np.column_stack([np.zeros_like(u), 1.0 + u])
+    assert apex_offsets(straight, straight) == []
