@@ -5,9 +5,19 @@ references once (:meth:`FmuInstance.port_group`); the hot path then reads and wr
 preallocated ctypes arrays through the raw FMI functions, so a step allocates nothing.
 Every FMI call that fails raises fmpy's ``FMICallException``; log lines the FMU sends are
 kept in :attr:`FmuInstance.messages` so an error can name what the FMU said.
+
+Logging: fmpy's printf-formatting proxy (``fmpy.logging.addLoggerProxy``) keeps *one* logger
+per process, the last one registered. So every handle registers the same module-level
+dispatcher, and each handle's callbacks carry its own ``componentEnvironment`` (a key into
+:data:`_ROUTES`), which the FMU passes back with every message: each line lands in the handle
+that owns the instance, however many FMUs the process holds.
 """
 
 import ctypes
+import itertools
+import numbers
+import weakref
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +26,14 @@ from components.common.errors import ConfigError
 __all__ = ["FmuInstance", "PortGroup", "extract_once"]
 
 _EXTRACTED = {}
+# componentEnvironment key -> weak reference to the FmuInstance that owns it.
+_ROUTES = {}
+_KEYS = itertools.count(1)
+# Lines whose componentEnvironment names no live handle (e.g. an FMU instantiated elsewhere).
+UNROUTED = deque(maxlen=200)
+_MESSAGES_KEPT = 1000   # per handle; a model that logs every step must not grow memory
+# pythonfmu 0.7.0 adds this line (status fatal) after any Python exception; it explains nothing.
+_INTERPRETER_TRAILER = "Fatal py exception encountered"
 _STATUS = ["ok", "warning", "discard", "error", "fatal", "pending"]
 _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
@@ -70,7 +88,12 @@ class FmuInstance:
         self.name = instance_name
         self.description, unzip_dir = extract_once(path)
         self.variables = {v.name: v for v in self.description.modelVariables}
-        self.messages = []
+        self.messages = deque(maxlen=_MESSAGES_KEPT)
+        self._route_key = next(_KEYS)
+        if len(_ROUTES) > 256:
+            for key in [k for k, ref in _ROUTES.items() if ref() is None]:
+                del _ROUTES[key]
+        _ROUTES[self._route_key] = weakref.ref(self)
         self._slave = FMU2Slave(guid=self.description.guid, unzipDirectory=unzip_dir,
                                 modelIdentifier=self.description.coSimulation.modelIdentifier,
                                 instanceName=instance_name)
@@ -85,23 +108,19 @@ class FmuInstance:
     # ----- life cycle ------------------------------------------------------------------------
     def _make_callbacks(self):
         from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+                               fmi2CallbackFunctions)
         from fmpy import calloc, free
 
-        def logger(environment, instance, status, category, message):
-            text = message.decode(errors="replace") if message else ""
-            self.messages.append((int(status), text))
-
         callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.logger = _dispatcher()
         callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:
-            from fmpy.logging import addLoggerProxy
-            addLoggerProxy(ctypes.byref(callbacks))
-        except Exception:  # the proxy only formats printf arguments; plain text still arrives
-            pass
+        callbacks.componentEnvironment = ctypes.c_void_p(self._route_key)
+        _install_proxy(callbacks)
         return callbacks
+
+    def _receive(self, status, text):
+        self.messages.append((status, text))
 
     def instantiate(self, start_time=0.0, stop_time=None, parameters=None):
         """Instantiate, set parameters in initialisation mode and leave it.
@@ -125,6 +144,7 @@ class FmuInstance:
                 self._note_failure(exc)
                 raise
         else:
+            _install_proxy(self._callbacks)  # another fmpy user may have taken the one proxy
             self._slave.instantiate(callbacks=self._callbacks, loggingOn=True)
         self._instantiated = True
         try:
@@ -189,9 +209,18 @@ class FmuInstance:
                               f"{', '.join(sorted(self.variables))}") from None
 
     def set_values(self, values):
-        """Set variables by name, each with the setter of its declared type."""
+        """Set variables by name, each with the setter of its declared type.
+
+        Values are not coerced: a Real takes an int or float (not a bool), an Integer an int
+        that fits 32 bits, a Boolean a bool, a String a str; anything else is a ConfigError
+        naming the variable (``int(10.7)`` would silently set 10, ctypes would wrap 2**32 + 10
+        to 10).
+        """
         for name, value in values.items():
             variable = self.variable(name)
+            problem = _type_problem(variable.type, value)
+            if problem:
+                raise ConfigError(f"{self.name}.{name} = {value!r}: {problem}")
             reference = [variable.valueReference]
             if variable.type == "Real":
                 self._slave.setReal(reference, [float(value)])
@@ -200,7 +229,7 @@ class FmuInstance:
             elif variable.type == "Boolean":
                 self._slave.setBoolean(reference, [bool(value)])
             else:
-                self._slave.setString(reference, [str(value)])
+                self._slave.setString(reference, [value])
 
     def get_values(self, names):
         """Return ``{name: value}`` for the given variables."""
@@ -288,13 +317,81 @@ class FmuInstance:
         return self._slave.deSerializeFMUstate(data)
 
     def last_error(self):
-        """The last log line with an error or discard status, or ''."""
+        """The model's explanation of the last failure, on one line, or ''.
+
+        The last line with status discard or error; failing that, the last fatal line other
+        than pythonfmu's trailer (which says only "unknown error"); failing that, the trailer.
+        """
+        fatal = trailer = ""
         for status, text in reversed(self.messages):
-            if status >= 2:
-                return text
-        return ""
+            if status in (2, 3):
+                return _one_line(text)
+            if status >= 4 and not fatal:
+                if text.startswith(_INTERPRETER_TRAILER):
+                    trailer = trailer or text
+                else:
+                    fatal = text
+        return _one_line(fatal or trailer)
 
     @staticmethod
     def status_label(status):
         """Name of an FMI status code."""
         return _STATUS[status] if 0 <= status < len(_STATUS) else f"status {status}"
+
+
+def _type_problem(type_name, value):
+    """Why ``value`` cannot be set as an FMI ``type_name`` without coercion, or ''."""
+    is_bool = type(value).__name__ in ("bool", "bool_")   # Python's or numpy's
+    if type_name == "Real":
+        ok = isinstance(value, numbers.Real) and not is_bool
+    elif type_name == "Integer":
+        ok = isinstance(value, numbers.Integral) and not is_bool
+        if ok and not -2**31 <= value <= 2**31 - 1:
+            return "does not fit a 32-bit fmi2Integer"
+    elif type_name == "Boolean":
+        ok = is_bool
+    else:
+        ok = isinstance(value, str)
+    return "" if ok else f"is {type(value).__name__}, expected an fmi2{type_name} value"
+
+
+def _one_line(text):
+    return " ".join(text.split())
+
+
+_DISPATCHER = None
+
+
+def _dispatcher():
+    """The one ctypes logger every handle registers (created once, kept alive here)."""
+    global _DISPATCHER
+    if _DISPATCHER is None:
+        from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+        def dispatch(environment, instance_name, status, category, message):
+            text = message.decode("utf-8", errors="replace") if message else ""
+            reference = _ROUTES.get(environment or 0)
+            handle = reference() if reference is not None else None
+            if handle is None:
+                name = instance_name.decode("utf-8", errors="replace") if instance_name else ""
+                UNROUTED.append((name, int(status), text))
+            else:
+                handle._receive(int(status), text)
+
+        _DISPATCHER = fmi2CallbackLoggerTYPE(dispatch)
+    return _DISPATCHER
+
+
+def _install_proxy(callbacks):
+    """Route fmpy's single printf proxy to :func:`_dispatcher` (a no-op if already so)."""
+    try:
+        from fmpy.logging import addLoggerProxy
+    except Exception:  # no proxy library: messages arrive unformatted, still per instance
+        return
+    # addLoggerProxy(f) makes f's logger the proxy's target and f's logger the proxy, unless
+    # f's logger already is the proxy. The probe re-targets the proxy at the dispatcher;
+    # the second call turns this handle's logger into the proxy (once).
+    probe = type(callbacks)()
+    probe.logger = _dispatcher()
+    addLoggerProxy(ctypes.byref(probe))
+    addLoggerProxy(ctypes.byref(callbacks))

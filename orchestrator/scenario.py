@@ -6,8 +6,16 @@ its allowed values. Every problem (unknown field, wrong type, bad choice, a step
 multiple of the base step) becomes one line naming the file, the field, the bad value and the
 valid choices, and all lines are raised together in one :class:`ConfigError`.
 
-Checks that need the FMUs (do the instances and parameters exist?) belong to the system layer;
-this module only knows the scenario's own rules.
+Before any FMU is loaded, the scenario is also checked against its ``.ssd`` (read as XML) and
+the valid-range tables of the FMUs it names (``components/<part>/ranges.toml``, the same tables
+the FMUs enforce and export as ``min``/``max``): ``[steps]`` names only instances of the system,
+every instance's step lies in its FMU's step range, and every parameter value, from the
+scenario or bound in the ``.ssd``, has the right type (no bool for a number, no string for a
+bool, no float for an integer) and lies in its valid range. FMUs the tables do not know are
+checked against their model descriptions by the system layer.
+
+Work is bounded: ``stop_time / base_step`` may not exceed ``max_steps`` (default
+:data:`DEFAULT_MAX_STEPS`; raise it in the scenario for a longer run).
 
 Seeds: the master passes ``seed`` to every instance that has a ``seed`` parameter, unless
 ``parameters`` sets that instance's seed explicitly.
@@ -16,6 +24,7 @@ Seeds: the master passes ``seed`` to every instance that has a ``seed`` paramete
 from __future__ import annotations
 
 import difflib
+import functools
 import hashlib
 import json
 import math
@@ -26,6 +35,7 @@ from pathlib import Path
 from components.common.errors import ConfigError
 
 __all__ = [
+    "DEFAULT_MAX_STEPS",
     "MASTERS",
     "STEP_TOLERANCE",
     "Field",
@@ -34,6 +44,8 @@ __all__ = [
     "load_scenario",
     "scenario_from_dict",
     "default_system_path",
+    "model_ranges",
+    "parse_seconds",
 ]
 
 MASTERS = ("gauss-seidel", "jacobi")
@@ -41,6 +53,10 @@ MASTERS = ("gauss-seidel", "jacobi")
 # steps such as 0.01 / 0.005 are not exact, but an error of 1e-9 is far below any real step.
 STEP_TOLERANCE = 1e-9
 _SEED_MAX = 2**31 - 1   # seeds travel through fmi2Integer (32-bit signed)
+# Longest run accepted without saying so: 1e7 base steps (28 h at 10 ms, about an hour of wall
+# time at the measured real-time factor). A scenario raises it with `max_steps = N`.
+DEFAULT_MAX_STEPS = 10_000_000
+_MAX_STEPS_LIMIT = 2**53   # integers above this are not exact as a float step count
 
 
 @dataclass(frozen=True)
@@ -61,6 +77,8 @@ class Field:
         Allowed values of a ``"choice"``.
     minimum : float or None
         Lower bound; exclusive for numbers (> 0), inclusive for integers.
+    maximum : float or None
+        Upper bound, inclusive (integers: default the largest seed).
     help : str
         What the field means; quoted in the "required" message.
     """
@@ -70,6 +88,7 @@ class Field:
     default: object = None
     choices: tuple | None = None
     minimum: float | None = None
+    maximum: float | None = None
     help: str = ""
 
 
@@ -79,8 +98,8 @@ SCHEMA = {
     "system": Field("string", help="path of the .ssd, relative to the scenario file; "
                                    "default ../fmus/SystemStructure.ssd"),
     "stop_time": Field("number", required=True, minimum=0.0, help="end time in s, > 0"),
-    "base_step": Field("number", default=0.01, minimum=0.0,
-                       help="master step in s, > 0; every step is a multiple of it"),
+    "base_step": Field("number", default=0.01, minimum=0.0, maximum=1.0,
+                       help="master step in s, in (0, 1]; every step is a multiple of it"),
     "steps": Field("steps", default={},
                    help="communication step per instance in s; default base_step"),
     "seed": Field("integer", default=1, minimum=0,
@@ -90,6 +109,8 @@ SCHEMA = {
     "outputs": Field("ports", default=[], help="'instance.port' to record; empty = all outputs"),
     "master": Field("choice", default="gauss-seidel", choices=MASTERS,
                     help="co-simulation algorithm"),
+    "max_steps": Field("integer", default=DEFAULT_MAX_STEPS, minimum=1, maximum=_MAX_STEPS_LIMIT,
+                       help="largest stop_time / base_step accepted (a bound on the work)"),
 }
 
 _KIND_TEXT = {
@@ -140,7 +161,7 @@ class _Checker:
     def add(self, field_name, message):
         self.problems.append(f"{self.source}: field '{field_name}': {message}")
 
-    def number(self, name, value, minimum):
+    def number(self, name, value, minimum, maximum=None):
         if not _is_number(value):
             self.add(name, f"{value!r} is {_type_name(value)}, expected a number")
             return None
@@ -150,14 +171,18 @@ class _Checker:
         if minimum is not None and value <= minimum:
             self.add(name, f"{value!r} must be > {minimum:g}")
             return None
+        if maximum is not None and value > maximum:
+            self.add(name, f"{value!r} must be <= {maximum:g}")
+            return None
         return float(value)
 
-    def integer(self, name, value, minimum):
+    def integer(self, name, value, minimum, maximum=None):
+        maximum = _SEED_MAX if maximum is None else maximum
         if not isinstance(value, int) or isinstance(value, bool):
             self.add(name, f"{value!r} is {_type_name(value)}, expected an integer")
             return None
-        if (minimum is not None and value < minimum) or value > _SEED_MAX:
-            self.add(name, f"{value!r} is outside {minimum}..{_SEED_MAX}")
+        if (minimum is not None and value < minimum) or value > maximum:
+            self.add(name, f"{value!r} is outside {minimum}..{maximum}")
             return None
         return value
 
@@ -261,6 +286,8 @@ class Scenario:
         ``"instance.port"`` to record; empty means every output.
     master : str
         ``"gauss-seidel"`` or ``"jacobi"``.
+    max_steps : int
+        Largest number of base steps accepted (a bound on the work, not a result input).
     source : str
         Where the scenario came from (file path or ``"<dict>"``); not part of equality.
     """
@@ -275,6 +302,7 @@ class Scenario:
     parameters: dict[str, object]
     outputs: list[str]
     master: str
+    max_steps: int = DEFAULT_MAX_STEPS
     source: str = field(default="<dict>", compare=False)
 
     def __hash__(self):
@@ -307,6 +335,7 @@ class Scenario:
             "parameters": dict(sorted(self.parameters.items())),
             "outputs": list(self.outputs),
             "master": self.master,
+            "max_steps": self.max_steps,
         }
 
     def with_overrides(self, **changes):
@@ -336,7 +365,7 @@ class Scenario:
         JSON-serialisable value) to include them.
         """
         data = self.to_dict()
-        del data["name"], data["description"]
+        del data["name"], data["description"], data["max_steps"]
         system = Path(data.pop("system"))
         data["system_sha256"] = (hashlib.sha256(system.read_bytes()).hexdigest()
                                  if system.is_file() else str(system))
@@ -388,9 +417,9 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
             continue
         value = data[name]
         if spec.kind == "number":
-            values[name] = check.number(name, value, spec.minimum)
+            values[name] = check.number(name, value, spec.minimum, spec.maximum)
         elif spec.kind == "integer":
-            values[name] = check.integer(name, value, spec.minimum)
+            values[name] = check.integer(name, value, spec.minimum, spec.maximum)
         elif spec.kind == "string":
             values[name] = check.string(name, value)
         elif spec.kind == "choice":
@@ -411,7 +440,12 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
                                                f"base_step {base!r} (ratio {ratio:.6g})")
         if values.get("stop_time") is not None:
             ok, ratio = _is_multiple(values["stop_time"], base)
-            if not ok:
+            limit = values.get("max_steps")
+            if limit is not None and ratio > limit + 0.5:
+                check.add("stop_time", f"{values['stop_time']!r} s at base_step {base!r} s is "
+                                       f"{ratio:.6g} steps, more than max_steps = {limit}; "
+                                       "raise max_steps in the scenario for a longer run")
+            elif not ok:
                 check.add("stop_time", f"{values['stop_time']!r} is not an integer multiple of "
                                        f"base_step {base!r} (ratio {ratio:.6g})")
 
@@ -426,12 +460,16 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
     else:
         system_path = None
     if system_path is not None and not system_path.is_file():
-        check.add("system", f"{str(system_path)!r} does not exist (a path to an .ssd file)")
+        what = "is a directory" if system_path.is_dir() else "does not exist"
+        check.add("system", f"{str(system_path)!r} {what} (a path to an .ssd file)")
+    elif system_path is not None:
+        _check_against_system(check, values, system_path)
 
+    if len(check.problems) == 1:  # one problem, one line
+        raise ConfigError(check.problems[0])
     if check.problems:
         count = len(check.problems)
-        noun = "problem" if count == 1 else "problems"
-        raise ConfigError(f"{source}: {count} {noun} in the scenario:\n"
+        raise ConfigError(f"{source}: {count} problems in the scenario:\n"
                           + "\n".join(f"  {p}" for p in check.problems))
     name = values["name"]
     if name is None:
@@ -440,7 +478,121 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
                     stop_time=values["stop_time"], base_step=values["base_step"],
                     steps=dict(values["steps"]), seed=values["seed"],
                     parameters=dict(values["parameters"]), outputs=list(values["outputs"]),
-                    master=values["master"], source=str(source))
+                    master=values["master"], max_steps=values["max_steps"],
+                    source=str(source))
+
+
+@functools.lru_cache(maxsize=32)
+def model_ranges(model_name):
+    """The valid-range table of a sonotrack FMU by model name, or None for another FMU.
+
+    Examples
+    --------
+    >>> model_ranges("RobotPlant").parameters["mass"].text()
+    '[0.1, 1000.0] kg'
+    """
+    from components.common.ranges import load_ranges
+    from orchestrator.build import FMU_PACKAGES
+
+    part = FMU_PACKAGES.get(model_name)
+    return load_ranges(part) if part is not None else None
+
+
+@functools.lru_cache(maxsize=32)
+def _read_system(path, _mtime_ns, _size):
+    from orchestrator.ssp import read_ssd
+
+    return read_ssd(path)
+
+
+def _check_against_system(check, values, system_path):
+    """Check instances, steps and parameter values against the .ssd and the FMUs' ranges."""
+    try:
+        stat = system_path.stat()
+        description = _read_system(system_path, stat.st_mtime_ns, stat.st_size)
+    except ConfigError as error:
+        check.problems.append(str(error))
+        return
+    instances = {c.name: c for c in description.components}
+    names = ", ".join(instances)
+    tables = {c.name: model_ranges(Path(c.source).stem) for c in description.components}
+    steps = values.get("steps") or {}
+    base = values.get("base_step")
+    for instance in sorted(steps):
+        if instance not in instances:
+            check.add(f"steps.{instance}", f"no instance {instance!r} in {system_path}"
+                                           f"{_suggestion(instance, instances)}; instances: {names}")
+    at_base_step = []
+    for instance, table in tables.items():
+        step = steps.get(instance, base)
+        if table is None or step is None or not _is_number(step):
+            continue
+        if table.step.problem(step) is None:
+            continue
+        if instance in steps:
+            check.add(f"steps.{instance}", f"{step!r} s is outside the step range of "
+                                           f"{instance} ({table.model}): {table.step.text()}")
+        else:
+            at_base_step.append(f"{instance} {table.step.text()}")
+    if at_base_step:
+        check.add("base_step", f"{base!r} s (the step of every instance not in [steps]) is "
+                               f"outside the step range of {'; '.join(at_base_step)}")
+    overridden = set()
+    for key, value in sorted((values.get("parameters") or {}).items()):
+        instance, _, name = key.partition(".")
+        where = f"parameters.{key}"
+        if instance not in instances:
+            check.add(where, f"no instance {instance!r} in {system_path}"
+                             f"{_suggestion(instance, instances)}; instances: {names}")
+            continue
+        overridden.add(key)
+        table = tables[instance]
+        if table is None:
+            continue   # not a sonotrack FMU: the system layer checks its model description
+        entry = table.parameters.get(name)
+        if entry is None:
+            check.add(where, f"{instance} ({table.model}) has no parameter {name!r}"
+                             f"{_suggestion(name, table.parameters)}; parameters: "
+                             f"{', '.join(table.parameters)}")
+            continue
+        problem = entry.problem(value)
+        if problem is not None:
+            check.add(where, f"{instance}.{problem}")
+    for component in description.components:
+        table = tables[component.name]
+        if table is None:
+            continue
+        for name, bound in sorted(component.parameters.items()):
+            entry = table.parameters.get(name)
+            if f"{component.name}.{name}" in overridden or entry is None:
+                continue   # unknown names are reported by the system layer with the FMU's list
+            problem = entry.problem(bound.value)
+            if problem is not None:
+                check.problems.append(f"{system_path}: parameter binding of component "
+                                      f"'{component.name}': {component.name}.{problem}")
+
+
+def _suggestion(name, choices):
+    close = difflib.get_close_matches(name, list(choices), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def parse_seconds(text, field_name, maximum=3600.0):
+    """Read a positive, finite number of seconds of at most ``maximum`` from a command line.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``field_name``, the text and the valid range.
+    """
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or not 0.0 < value <= maximum:
+        raise ConfigError(f"{field_name} {text!r}: expected a number of seconds in "
+                          f"(0, {maximum:g}]")
+    return value
 
 
 def load_scenario(path):
@@ -469,11 +621,26 @@ def load_scenario(path):
     0.02
     """
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"{path}: is a directory, expected a TOML scenario file")
+    if not path.exists():
+        raise ConfigError(f"{path}: scenario file does not exist")
     try:
-        with path.open("rb") as stream:
-            data = tomllib.load(stream)
+        raw = path.read_bytes()
     except OSError as error:
-        raise ConfigError(f"{path}: cannot read the scenario ({error})") from error
+        raise ConfigError(f"{path}: cannot read the scenario ({error.strerror or error})") \
+            from error
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = raw[:error.start].count(b"\n") + 1
+        raise ConfigError(f"{path}: line {line}: not UTF-8 text (byte 0x{raw[error.start]:02x} "
+                          f"at position {error.start}); TOML files are UTF-8") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
-        raise ConfigError(f"{path}: not valid TOML ({error})") from error
+        raise ConfigError(f"{path}: not valid TOML ({error})") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: not a scenario: tables or arrays nested too deeply "
+                          "for TOML parsing") from None
     return scenario_from_dict(data, source=str(path), base_dir=path.resolve().parent)

@@ -63,6 +63,8 @@ CONNECTOR_TYPES = ("Real", "Integer", "Boolean", "String", "Enumeration", "Binar
 PARAMETER_TYPES = ("Real", "Integer", "Boolean", "String")
 _BASE_UNIT_ATTRIBUTES = ("kg", "m", "s", "A", "K", "mol", "cd", "rad", "factor", "offset")
 _FMU_TYPE = "application/x-fmu-sharedlibrary"
+# Largest accepted osp:StepSizeHint [s]; every sonotrack FMU's step range ends at 1 s.
+STEP_SIZE_HINT_MAX = 1.0
 
 
 def _ssd(tag):
@@ -247,6 +249,8 @@ class _Problems:
         self.lines.append(f"{where}: {message}")
 
     def raise_if_any(self):
+        if len(self.lines) == 1:
+            raise ConfigError(self.lines[0])
         if self.lines:
             count = len(self.lines)
             noun = "problem" if count == 1 else "problems"
@@ -288,12 +292,26 @@ def _float_attribute(node, attribute, problems):
         return None
 
 
+class _OutOfRange(ValueError):
+    """A value that parses but is never a valid parameter."""
+
+
 def _convert(type_name, text):
-    """Convert an XML attribute text to the Python value of an SSP type; raises ValueError."""
+    """Convert an XML attribute text to the Python value of an SSP type; raises ValueError.
+
+    A Real must be finite and an Integer must fit an fmi2Integer (32-bit signed): neither NaN
+    nor a silently wrapped integer is ever a parameter value.
+    """
     if type_name == "Real":
-        return float(text)
+        value = float(text)
+        if not math.isfinite(value):
+            raise _OutOfRange("not finite")
+        return value
     if type_name == "Integer":
-        return int(text)
+        value = int(text)
+        if not -2**31 <= value <= 2**31 - 1:
+            raise _OutOfRange("does not fit a 32-bit fmi2Integer")
+        return value
     if type_name == "Boolean":
         lowered = text.strip().lower()
         if lowered in ("true", "1"):
@@ -323,9 +341,10 @@ def _read_parameter_set(parameter_set, problems):
             continue
         try:
             parameters[name] = ParameterValue(type_name, _convert(type_name, text))
-        except ValueError:
+        except ValueError as error:
+            reason = f" ({error})" if isinstance(error, _OutOfRange) else ""
             problems.add(typed[0], f"{_describe(parameter)}: value {text!r} is not a valid "
-                                   f"ssv:{type_name}")
+                                   f"ssv:{type_name}{reason}")
     return parameters
 
 
@@ -384,7 +403,12 @@ def _read_step_size_hint(annotations, problems):
             continue
         hint = _child(annotation, f"{{{OSP_NAMESPACE}}}StepSizeHint")
         if hint is not None:
-            return _float_attribute(hint, "value", problems)
+            value = _float_attribute(hint, "value", problems)
+            if value is not None and not 0.0 < value <= STEP_SIZE_HINT_MAX:
+                problems.add(hint, f"{_describe(hint)}: value={hint.get('value')!r} is not a "
+                                   f"step size in (0, {STEP_SIZE_HINT_MAX!r}] s")
+                return None
+            return value
     return None
 
 

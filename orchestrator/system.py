@@ -66,7 +66,10 @@ class SystemDescriptionError(ConfigError):
         where = f"{path}: " if path is not None else ""
         noun = "problem" if count == 1 else "problems"
         lines = "\n".join(f"  {i}. {p}" for i, p in enumerate(self.problems, start=1))
-        super().__init__(f"{where}{count} {noun} in the system:\n{lines}")
+        if count == 1:  # one problem, one line
+            super().__init__(f"{where}{self.problems[0]}")
+        else:
+            super().__init__(f"{where}{count} {noun} in the system:\n{lines}")
 
 
 @dataclass(frozen=True)

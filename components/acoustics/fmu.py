@@ -1,7 +1,7 @@
 """The AcousticLocalizer FMU: a thin pythonfmu slave around :class:`LocalizerCore`."""
 
-from ..common.errors import InputError, SonotrackError
-from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from ..common.errors import InputError
+from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .localizer import LocalizerCore
 from .settings import DEFAULTS
 
@@ -31,7 +31,6 @@ _STRING_PARAMETERS = (
     ("method", "range/bearing estimator: exact (near-field), paper (Eq. 4 + Eq. 5), far_field"),
     ("weighting", "cross-correlation weighting over the source band: band or phat"),
 )
-_POSITION_PORTS = ("source_x", "source_y", "robot_x", "robot_y", "robot_heading")
 
 
 class AcousticLocalizer(SonotrackSlave):
@@ -46,6 +45,7 @@ class AcousticLocalizer(SonotrackSlave):
                    "source's chirp (fractional delays, 1/r, noise, 10-bit ADC) and estimates "
                    "range and bearing by band-limited GCC and the exact near-field geometry")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
+    valid_ranges = load_ranges("acoustics")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -96,16 +96,11 @@ class AcousticLocalizer(SonotrackSlave):
         parameters = {name: float(getattr(self, name)) for name, _, _ in _REAL_PARAMETERS}
         parameters.update({name: int(getattr(self, name)) for name, _ in _INTEGER_PARAMETERS})
         parameters.update({name: str(getattr(self, name)) for name, _ in _STRING_PARAMETERS})
-        try:
-            self.core = LocalizerCore(**parameters)
-        except SonotrackError as exc:
-            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
-            raise
+        self.core = LocalizerCore(**parameters)
 
     def do_step(self, current_time, step_size):
-        port = self.first_non_finite(_POSITION_PORTS)
-        if port is not None:
-            return self.refuse(port, getattr(self, port), "not finite")
+        if self.inputs_refused() or self.step_refused(step_size):
+            return False
         core = self.core
         try:
             attempted = core.step(current_time, step_size, self.source_x, self.source_y,

@@ -7,15 +7,19 @@ and their direct dependencies through :class:`SonotrackSlave`, whose :meth:`to_x
 compliant modelDescription.xml, and whose state hooks save the model core in full.
 """
 
+import functools
+import json
 import math
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Boolean, DefaultExperiment, Fmi2Slave, Integer, Real, String
 from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variability
 
+from .errors import InputError, ParameterError, SonotrackError
+from .ranges import load_ranges
 from .state import restore, snapshot
 
-__all__ = ["SonotrackSlave", "DefaultExperiment", "Fmi2Status", "UNIT_BASES"]
+__all__ = ["SonotrackSlave", "DefaultExperiment", "Fmi2Status", "UNIT_BASES", "load_ranges"]
 
 # SI base-unit exponents of every unit a sonotrack port may carry (FMI 2.0 BaseUnit attributes).
 UNIT_BASES = {
@@ -55,15 +59,36 @@ _KIND = {Real: "Real", Integer: "Integer", Boolean: "Boolean", String: "String"}
 
 
 class SonotrackSlave(Fmi2Slave):
-    """Base of every sonotrack slave: typed, unit-annotated ports and complete state.
+    """Base of every sonotrack slave: typed, unit-annotated ports, valid ranges, complete state.
 
     A slave sets each port's attribute, declares it with one of the ``input_*``, ``output_*``
     or ``parameter_*`` methods, builds its core in :meth:`exit_initialization_mode` and calls
     it in ``do_step``. Attributes named in ``hidden_state`` (default: ``core``) are saved and
     restored with the FMU state, in full.
+
+    ``valid_ranges`` (a :class:`~components.common.ranges.RangeTable`, read from the part's
+    ``ranges.toml``) must hold every parameter and input: a port without a range cannot be
+    declared. :meth:`check_parameters` refuses parameters outside it (raising
+    :class:`ParameterError`), :meth:`inputs_refused` and :meth:`step_refused` refuse inputs
+    and steps (``do_step`` then returns False), and :meth:`to_xml` writes it as ``min``/``max``.
+
+    Error contract: ``exit_initialization_mode`` raises the project's exceptions after logging
+    their message at error status (pythonfmu 0.7.0's binary turns any exception into fmi2Fatal
+    and logs only "unknown error", so the model's own line must be logged first); ``do_step``
+    refuses with a logged line and False (fmi2Discard). An unexpected exception in either is
+    logged with the instance name and its type instead of escaping unexplained.
     """
 
     hidden_state = ("core",)
+    valid_ranges = None
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "do_step" in cls.__dict__:
+            cls.do_step = _guard_step(cls.__dict__["do_step"])
+        if "exit_initialization_mode" in cls.__dict__:
+            cls.exit_initialization_mode = _guard_initialization(
+                cls.__dict__["exit_initialization_mode"])
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -73,6 +98,10 @@ class SonotrackSlave(Fmi2Slave):
         # value reference -> attribute name, per type: the hot get/set path (below) looks the
         # attribute up directly instead of pythonfmu's per-call isinstance and getter lambdas.
         self._names_by_type = {Real: {}, Integer: {}, Boolean: {}, String: {}}
+        # (name, min, max) of every Real or Integer input: the per-step range test.
+        self._input_bounds = []
+        self._step_bounds = ((self.valid_ranges.step.minimum, self.valid_ranges.step.maximum)
+                             if self.valid_ranges is not None else (0.0, math.inf))
 
     # ----- port declarations -------------------------------------------------------------
     def _declare(self, kind, name, causality, description, unit=None, depends_on=None):
@@ -89,12 +118,31 @@ class SonotrackSlave(Fmi2Slave):
             if unit not in UNIT_BASES:
                 raise ValueError(f"port {name!r}: unit {unit!r} is not one of {sorted(UNIT_BASES)}")
             self._units[name] = unit
+        if causality in (Fmi2Causality.parameter, Fmi2Causality.input):
+            entry = self._declared_range(kind, name, unit)
+            if causality == Fmi2Causality.input and kind in (Real, Integer):
+                self._input_bounds.append((name, entry.minimum, entry.maximum))
         variable = kind(name, causality=causality, description=description,
                         variability=variability, initial=initial)
         self.register_variable(variable)
         self._names_by_type[kind][variable.value_reference] = name
         if causality == Fmi2Causality.output:
             self._dependencies[name] = tuple(depends_on or ())
+
+    def _declared_range(self, kind, name, unit):
+        """The valid range of a parameter or input; a port without one cannot be declared."""
+        table = self.valid_ranges
+        where = table.source if table is not None else f"{type(self).__name__}.valid_ranges"
+        entry = table.entry(name) if table is not None else None
+        if entry is None:
+            raise ValueError(f"port {name!r} has no valid range in {where}")
+        if entry.type != _KIND[kind] or (kind is Real and entry.unit != unit):
+            raise ValueError(f"port {name!r} is {_KIND[kind]} [{unit}] but {where} says "
+                             f"{entry.type} [{entry.unit}]")
+        problem = entry.problem(getattr(self, name))
+        if problem is not None:
+            raise ValueError(f"start value of {problem} ({where})")
+        return entry
 
     def input_real(self, name, unit, description):
         """Declare a Real input with its SI unit."""
@@ -170,7 +218,46 @@ class SonotrackSlave(Fmi2Slave):
 
     def set_boolean(self, vrs, values):
         for name, value in zip(self._names(Boolean, vrs), values):
-            setattr(self, name, value)
+            setattr(self, name, bool(value))  # an fmi2Boolean is an int: 0 false, else true
+
+    # ----- valid ranges -----------------------------------------------------------------------
+    def check_parameters(self):
+        """Raise :class:`ParameterError` naming every parameter outside its valid range.
+
+        Call first in ``exit_initialization_mode``; the message names the instance, each
+        parameter, its value and its valid range or choices.
+        """
+        problems = [problem for name, entry in self.valid_ranges.parameters.items()
+                    if (problem := entry.problem(getattr(self, name))) is not None]
+        if problems:
+            raise ParameterError(f"{self.instance_name}: parameter " + "; parameter ".join(problems))
+
+    def inputs_refused(self, bounds=None):
+        """Log the first input outside its valid range and return True; False if all are valid.
+
+        ``bounds`` is a subset of ``self._input_bounds`` (default: every Real and Integer input);
+        NaN and inf are outside every range.
+        """
+        for name, low, high in self._input_bounds if bounds is None else bounds:
+            value = getattr(self, name)
+            if not low <= value <= high:
+                entry = self.valid_ranges.inputs[name]
+                self.refuse(name, value, f"outside its valid range {entry.text()}")
+                return True
+        return False
+
+    def input_bounds(self, names):
+        """The ``(name, min, max)`` entries of some inputs, for :meth:`inputs_refused`."""
+        return tuple(b for b in self._input_bounds if b[0] in names)
+
+    def step_refused(self, step_size):
+        """Log and return True if ``step_size`` is outside the table's communication step range."""
+        low, high = self._step_bounds
+        if low <= step_size <= high:
+            return False
+        self.refuse("step_size", step_size,
+                    f"the communication step must be in {self.valid_ranges.step.text()}")
+        return True
 
     # ----- refusing bad input ----------------------------------------------------------------
     def refuse(self, port, value, reason):
@@ -206,6 +293,11 @@ class SonotrackSlave(Fmi2Slave):
         return state
 
     def _set_fmu_state(self, state):
+        problem = self._state_problem(state)
+        if problem is not None:
+            message = f"{self.instance_name}: FMU state refused: {problem}"
+            self.log(message, Fmi2Status.error)
+            raise InputError(message)
         state = dict(state)
         hidden = state.pop("__hidden__", {})
         self._logged_once = set(state.pop("__logged_once__", []))
@@ -219,6 +311,32 @@ class SonotrackSlave(Fmi2Slave):
             else:
                 setattr(self, name, saved)
 
+    def _state_problem(self, state):
+        """Why ``state`` is not a complete state of this slave, or None."""
+        if not isinstance(state, dict):
+            return f"expected a table of saved values, got {type(state).__name__}"
+        if "__unreadable__" in state:
+            return state["__unreadable__"]
+        expected = {v.name for v in self.vars.values()} | {"__hidden__", "__logged_once__"}
+        missing = sorted(expected - set(state))
+        unknown = sorted(set(state) - expected)
+        if missing or unknown:
+            return (f"not a state of {type(self).__name__}"
+                    + (f"; missing {', '.join(missing[:5])}" if missing else "")
+                    + (f"; unknown {', '.join(unknown[:5])}" if unknown else ""))
+        hidden = state["__hidden__"]
+        if not isinstance(hidden, dict) or set(hidden) != set(self.hidden_state):
+            return f"its hidden state does not hold exactly {', '.join(self.hidden_state)}"
+        return None
+
+    @staticmethod
+    def _fmu_state_from_bytes(state):
+        try:
+            return json.loads(bytes(state).decode("utf-8"))
+        except (UnicodeDecodeError, ValueError) as error:
+            # Validated by _set_fmu_state, which names the instance when it refuses.
+            return {"__unreadable__": f"serialized state is not valid ({error})"}
+
     # ----- compliant modelDescription.xml ------------------------------------------------------
     def to_xml(self, model_options=dict()):
         """Return pythonfmu's model description with units, variabilities and ModelStructure fixed."""
@@ -226,12 +344,31 @@ class SonotrackSlave(Fmi2Slave):
         self._add_unit_definitions(root)
         variables = list(self.vars.values())
         index = {v.name: i + 1 for i, v in enumerate(variables)}
+        self._check_table_declared(variables)
         for node, variable in zip(root.find("ModelVariables"), variables):
             unit = self._units.get(variable.name)
             if unit is not None:
                 node.find("Real").set("unit", unit)
+            entry = (self.valid_ranges.entry(variable.name)
+                     if variable.causality in (Fmi2Causality.parameter, Fmi2Causality.input)
+                     else None)
+            if entry is not None and entry.type in ("Real", "Integer"):
+                typed = node.find(entry.type)
+                typed.set("min", repr(entry.minimum) if entry.type == "Real" else str(entry.minimum))
+                typed.set("max", repr(entry.maximum) if entry.type == "Real" else str(entry.maximum))
         self._write_model_structure(root, variables, index)
         return root
+
+    def _check_table_declared(self, variables):
+        """Every entry of the range table must be a declared parameter or input of that name."""
+        declared = {v.name: v.causality for v in variables}
+        table = self.valid_ranges
+        for causality, entries in ((Fmi2Causality.parameter, table.parameters),
+                                   (Fmi2Causality.input, table.inputs)):
+            for name in entries:
+                if declared.get(name) != causality:
+                    raise ValueError(f"{table.source}: {name} is not a declared "
+                                     f"{causality.name} of {type(self).__name__}")
 
     def _add_unit_definitions(self, root):
         used = sorted(set(self._units.values()))
@@ -278,3 +415,45 @@ def _unknown(index, dependencies):
         "dependencies": " ".join(str(i) for i in dependencies),
         "dependenciesKind": " ".join("dependent" for _ in dependencies),
     }
+
+
+def _guard_step(do_step):
+    """Wrap a slave's ``do_step`` so an unexpected exception is a logged refusal (False)."""
+
+    @functools.wraps(do_step)
+    def guarded(self, current_time, step_size):
+        try:
+            return do_step(self, current_time, step_size)
+        except Exception as exc:  # reported with its type and the step, never swallowed
+            self.log(f"{self.instance_name}: doStep from t = {current_time!r} s by "
+                     f"{step_size!r} s failed: {type(exc).__name__}: {exc}", Fmi2Status.error)
+            return False
+
+    return guarded
+
+
+def _guard_initialization(exit_initialization_mode):
+    """Wrap ``exit_initialization_mode`` so every failure is logged with the model's message.
+
+    The exception still propagates (the binary maps it to fmi2Error, or pythonfmu 0.7.0's to
+    fmi2Fatal); the logged line is what the host shows.
+    """
+
+    @functools.wraps(exit_initialization_mode)
+    def guarded(self):
+        try:
+            if self.valid_ranges is not None:
+                self.check_parameters()
+            return exit_initialization_mode(self)
+        except SonotrackError as exc:
+            text = str(exc)
+            if not text.startswith(f"{self.instance_name}:"):
+                text = f"{self.instance_name}: {text}"
+            self.log(text, Fmi2Status.error)
+            raise
+        except Exception as exc:
+            self.log(f"{self.instance_name}: initialisation failed: {type(exc).__name__}: {exc}",
+                     Fmi2Status.error)
+            raise
+
+    return guarded

@@ -1,9 +1,6 @@
 """The WheelController FMU: a thin pythonfmu slave around :class:`WheelSpeedController`."""
 
-from math import isfinite
-
-from ..common.errors import SonotrackError
-from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .controller import DEFAULTS, WheelSpeedController
 
 __all__ = ["WheelController"]
@@ -37,6 +34,7 @@ class WheelController(SonotrackSlave):
     description = ("Wheel-speed controller: fuzzy gain-scheduled PD (Zhao-Tomizuka-Isaka rules), "
                    "PID baseline or fixed PD, with motor-model feedforward")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.02)
+    valid_ranges = load_ranges("control")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -74,24 +72,15 @@ class WheelController(SonotrackSlave):
         parameters = {name: float(getattr(self, name)) for name, _, _ in _REAL_PARAMETERS}
         parameters.update(mode=str(self.mode), fuzzy_method=str(self.fuzzy_method),
                           feedforward=bool(self.feedforward))
-        try:
-            self.core = WheelSpeedController(**parameters)
-        except SonotrackError as exc:
-            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
-            raise
+        self.core = WheelSpeedController(**parameters)
         self.kp = self.core.kp
         self.kd = self.core.kd
 
     def do_step(self, current_time, step_size):
-        v_ref, v_meas = self.v_ref, self.v_meas
-        # One test for the usual all-finite case; the bad port is looked for only on failure.
-        if not (isfinite(v_ref) and isfinite(v_meas)):
-            port = self.first_non_finite(("v_ref", "v_meas"))
-            return self.refuse(port, getattr(self, port), "not a finite speed")
-        if not step_size > 0.0:
-            return self.refuse("step_size", step_size, "must be > 0")
+        if self.inputs_refused() or self.step_refused(step_size):
+            return False
         core = self.core
-        self.voltage = core.step(v_ref, v_meas, step_size)
+        self.voltage = core.step(self.v_ref, self.v_meas, step_size)
         self.kp = core.kp
         self.kd = core.kd
         self.error = core.error

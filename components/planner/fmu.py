@@ -1,9 +1,7 @@
 """The CurvaturePlanner FMU: a thin pythonfmu slave around :class:`TargetPlanner`."""
 
-from math import isfinite
-
-from ..common.errors import InputError, SonotrackError
-from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from ..common.errors import InputError
+from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .geometry import RADIUS_STRAIGHT
 from .planner import FIX_NEGATIVE, TargetPlanner
 
@@ -29,6 +27,7 @@ class CurvaturePlanner(SonotrackSlave):
                    "trapezoidal wheel speeds on one time base; rotate_then_go and pure_pursuit "
                    "baselines")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=15.0, step_size=0.02)
+    valid_ranges = load_ranges("planner")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -75,26 +74,22 @@ class CurvaturePlanner(SonotrackSlave):
         for name, unit, _, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
         self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
+        # distance and bearing mean something only while valid is true.
+        self._bounds_valid = self.input_bounds(("distance", "bearing", "measurement_id",
+                                                "wheel_speed_left", "wheel_speed_right"))
+        self._bounds_invalid = self.input_bounds(("measurement_id", "wheel_speed_left",
+                                                  "wheel_speed_right"))
 
     def exit_initialization_mode(self):
         parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
-        try:
-            self.core = TargetPlanner(mode=str(self.mode), **parameters)
-        except SonotrackError as exc:
-            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
-            raise
+        self.core = TargetPlanner(mode=str(self.mode), **parameters)
 
     def do_step(self, current_time, step_size):
         left, right = self.wheel_speed_left, self.wheel_speed_right
         valid, distance, bearing = self.valid, self.distance, self.bearing
-        # One test for the usual all-finite case; the bad port is looked for only on failure.
-        if not (isfinite(left) and isfinite(right)
-                and (not valid or (isfinite(distance) and isfinite(bearing)))):
-            ports = ("wheel_speed_left", "wheel_speed_right", "distance", "bearing")
-            port = self.first_non_finite(ports if valid else ports[:2])
-            return self.refuse(port, getattr(self, port), "not finite")
-        if not step_size > 0.0:
-            return self.refuse("step_size", step_size, "must be > 0")
+        if self.inputs_refused(self._bounds_valid if valid else self._bounds_invalid) or \
+                self.step_refused(step_size):
+            return False
         core = self.core
         try:
             self.v_ref_left, self.v_ref_right = core.update(

@@ -2,8 +2,7 @@
 
 from dataclasses import fields
 
-from ..common.errors import SonotrackError
-from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .parameters import PlantParameters
 from .plant import RobotPlantCore
 
@@ -71,6 +70,7 @@ class RobotPlant(SonotrackSlave):
                    "friction-circle traction with longitudinal and lateral slip, "
                    "728-count encoders, encoder odometry beside the true pose")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
+    valid_ranges = load_ranges("plant")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -95,20 +95,12 @@ class RobotPlant(SonotrackSlave):
 
     def exit_initialization_mode(self):
         values = {field.name: getattr(self, field.name) for field in fields(PlantParameters)}
-        values["encoder_ppr"] = int(values["encoder_ppr"])
-        try:
-            self.core = RobotPlantCore(PlantParameters(**values))
-        except SonotrackError as exc:
-            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
-            raise
+        self.core = RobotPlantCore(PlantParameters(**values))
         self._publish()
 
     def do_step(self, current_time, step_size):
-        port = self.first_non_finite(_INPUTS)
-        if port is not None:
-            return self.refuse(port, getattr(self, port), "not a finite voltage")
-        if not step_size > 0.0:
-            return self.refuse("step_size", step_size, "must be > 0")
+        if self.inputs_refused() or self.step_refused(step_size):
+            return False
         supply = self.core.parameters.v_supply
         for port in _INPUTS:
             value = getattr(self, port)

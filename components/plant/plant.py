@@ -34,6 +34,11 @@ from .traction import _LINEAR_SLIP, slip_ratio
 __all__ = ["RobotPlantCore"]
 
 _NS = 1_000_000_000
+# Work bound of one communication step: integration substeps plus encoder samples. The valid
+# ranges (step <= 1 s, max_substep >= 10 us, speed_window >= 0.1 ms) keep a step below
+# 1.1e5; a core used directly with other values refuses a step above this bound instead of
+# running for hours. Raise it here if a study really needs more work per step.
+MAX_SUBSTEPS_PER_STEP = 200_000
 # ROS2's L-stable choice with the smaller error constant (the other root is 1 + 1/sqrt 2).
 _GAMMA = 1.0 - 1.0 / math.sqrt(2.0)
 _MAX_PIECES = 16
@@ -186,6 +191,13 @@ class RobotPlantCore:
         if step_ns <= 0:
             raise InputError(f"RobotPlant step_size = {step_size!r} must be > 0 "
                              "(at least 1 ns)")
+        work = -(-step_ns // self.max_substep_ns) + step_ns // self.window_ns + 1
+        if work > MAX_SUBSTEPS_PER_STEP:
+            raise InputError(f"RobotPlant step_size = {step_size!r} s needs {work} substeps "
+                             f"(max_substep = {self.parameters.max_substep!r} s, speed_window "
+                             f"= {self.parameters.speed_window!r} s), more than "
+                             f"MAX_SUBSTEPS_PER_STEP = {MAX_SUBSTEPS_PER_STEP}; take a shorter "
+                             "step or a longer max_substep / speed_window")
         supply = self.parameters.v_supply
         applied_left = min(supply, max(-supply, voltage_left))
         applied_right = min(supply, max(-supply, voltage_right))

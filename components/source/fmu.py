@@ -2,8 +2,7 @@
 
 import math
 
-from ..common.errors import SonotrackError
-from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave
+from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .source import MovingSource
 
 __all__ = ["SoundSource"]
@@ -33,6 +32,7 @@ class SoundSource(SonotrackSlave):
     description = ("Moving sound source: straight, S-curve, static or CSV-waypoint path with a "
                    "trapezoidal speed profile; a burst every emit_period, mute at the end")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=35.0, step_size=0.01)
+    valid_ranges = load_ranges("source")
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -60,15 +60,13 @@ class SoundSource(SonotrackSlave):
 
     def exit_initialization_mode(self):
         parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
-        try:
-            self.core = MovingSource(path=str(self.path), mute_at_end=bool(self.mute_at_end),
-                                     **parameters)
-        except SonotrackError as exc:
-            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
-            raise
+        self.core = MovingSource(path=str(self.path), mute_at_end=bool(self.mute_at_end),
+                                 **parameters)
         self._copy_outputs()
 
     def do_step(self, current_time, step_size):
+        if self.step_refused(step_size):
+            return False
         self.core.advance_to(current_time + step_size)
         self._copy_outputs()
         return True

@@ -66,7 +66,7 @@ def test_bad_mode_refused_at_initialisation():
     slave = WheelController(instance_name="t")
     slave.log = lambda *a, **k: None
     slave.mode = "fuzzy"
-    with pytest.raises(ValueError, match="fgs_pd, pid, pd"):
+    with pytest.raises(ValueError, match="mode = 'fuzzy' .* one of 'fgs_pd', 'pid', 'pd'"):
         slave.exit_initialization_mode()
 
 

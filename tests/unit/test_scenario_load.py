@@ -101,10 +101,7 @@ def test_one_clear_line_per_bad_field(field, value, message):
     data = {"stop_time": 1.0, field: value}
     with pytest.raises(ConfigError) as caught:
         scenario_from_dict(data, source="sweep.toml")
-    assert str(caught.value).splitlines() == [
-        "sweep.toml: 1 problem in the scenario:",
-        f"  sweep.toml: field '{field}': {message}",
-    ]
+    assert str(caught.value).splitlines() == [f"sweep.toml: field '{field}': {message}"]
 
 
 @pytest.mark.parametrize("step, ok", [
@@ -133,12 +130,12 @@ def test_missing_system_file_and_bad_toml(tmp_path):
     missing = (tmp_path / "scenarios" / "nowhere.ssd").resolve()
     with pytest.raises(ConfigError) as caught:
         load_scenario(path)
-    assert str(caught.value).splitlines()[1] == (
-        f"  {path}: field 'system': '{missing}' does not exist (a path to an .ssd file)")
+    assert str(caught.value).splitlines() == [
+        f"{path}: field 'system': '{missing}' does not exist (a path to an .ssd file)"]
     bad = write(tmp_path, "stop_time = \n", name="bad.toml")
     with pytest.raises(ConfigError, match=r"bad\.toml: not valid TOML \(.*line 1"):
         load_scenario(bad)
-    with pytest.raises(ConfigError, match=r"absent\.toml: cannot read the scenario"):
+    with pytest.raises(ConfigError, match=r"absent\.toml: scenario file does not exist"):
         load_scenario(tmp_path / "absent.toml")
 
 
@@ -172,7 +169,7 @@ def test_overrides_merge_parameters_and_steps_and_revalidate():
 def test_input_hash_is_sha256_of_the_canonical_inputs():
     scenario = load_scenario(SCENARIOS / "static_case1.toml")
     data = scenario.to_dict()
-    del data["name"], data["description"], data["system"]
+    del data["name"], data["description"], data["system"], data["max_steps"]
     data["system_sha256"] = hashlib.sha256(SSD.read_bytes()).hexdigest()
     canonical = json.dumps(data, sort_keys=True, separators=(",", ":"))
     assert scenario.input_hash() == hashlib.sha256(canonical.encode()).hexdigest()
