@@ -16,6 +16,7 @@ that owns the instance, however many FMUs the process holds.
 import ctypes
 import itertools
 import numbers
+import re
 import weakref
 from collections import deque
 from dataclasses import dataclass
@@ -34,6 +35,8 @@ UNROUTED = deque(maxlen=200)
 _MESSAGES_KEPT = 1000   # per handle; a model that logs every step must not grow memory
 # pythonfmu 0.7.0 adds this line (status fatal) after any Python exception; it explains nothing.
 _INTERPRETER_TRAILER = "Fatal py exception encountered"
+# sonotrack's binary reports a Python exception as "<fmi2 function>: <method>: <message>".
+_BINARY_PREFIX = re.compile(r"fmi2\w+: [\w ]+: ")
 _STATUS = ["ok", "warning", "discard", "error", "fatal", "pending"]
 _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_int}
 
@@ -325,13 +328,23 @@ class FmuInstance:
         fatal = trailer = ""
         for status, text in reversed(self.messages):
             if status in (2, 3):
-                return _one_line(text)
+                return _one_line(self._model_line(text))
             if status >= 4 and not fatal:
                 if text.startswith(_INTERPRETER_TRAILER):
                     trailer = trailer or text
                 else:
                     fatal = text
         return _one_line(fatal or trailer)
+
+    def _model_line(self, text):
+        """``text`` without the FMU binary's ``fmi2Function: method:`` prefix when the model
+        logged the rest itself (sonotrack's binary repeats a refusal's message that way)."""
+        match = _BINARY_PREFIX.match(text)
+        if match is not None:
+            rest = text[match.end():]
+            if any(logged == rest for _, logged in self.messages):
+                return rest
+        return text
 
     @staticmethod
     def status_label(status):

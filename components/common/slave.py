@@ -315,8 +315,6 @@ class SonotrackSlave(Fmi2Slave):
         """Why ``state`` is not a complete state of this slave, or None."""
         if not isinstance(state, dict):
             return f"expected a table of saved values, got {type(state).__name__}"
-        if "__unreadable__" in state:
-            return state["__unreadable__"]
         expected = {v.name for v in self.vars.values()} | {"__hidden__", "__logged_once__"}
         missing = sorted(expected - set(state))
         unknown = sorted(set(state) - expected)
@@ -334,8 +332,8 @@ class SonotrackSlave(Fmi2Slave):
         try:
             return json.loads(bytes(state).decode("utf-8"))
         except (UnicodeDecodeError, ValueError) as error:
-            # Validated by _set_fmu_state, which names the instance when it refuses.
-            return {"__unreadable__": f"serialized state is not valid ({error})"}
+            raise InputError(f"FMU state refused: the serialized state is not valid "
+                             f"({error})") from None
 
     # ----- compliant modelDescription.xml ------------------------------------------------------
     def to_xml(self, model_options=dict()):
