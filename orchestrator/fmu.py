@@ -337,13 +337,11 @@ class FmuInstance:
         return _one_line(fatal or trailer)
 
     def _model_line(self, text):
-        """``text`` without the FMU binary's ``fmi2Function: method:`` prefix when the model
-        logged the rest itself (sonotrack's binary repeats a refusal's message that way)."""
+        """``text`` without sonotrack's binary's ``fmi2Function: method:`` prefix when the rest
+        is the model's own message (it starts with this instance's name)."""
         match = _BINARY_PREFIX.match(text)
-        if match is not None:
-            rest = text[match.end():]
-            if any(logged == rest for _, logged in self.messages):
-                return rest
+        if match is not None and text[match.end():].startswith(f"{self.name}: "):
+            return text[match.end():]
         return text
 
     @staticmethod

@@ -72,11 +72,11 @@ class SonotrackSlave(Fmi2Slave):
     :class:`ParameterError`), :meth:`inputs_refused` and :meth:`step_refused` refuse inputs
     and steps (``do_step`` then returns False), and :meth:`to_xml` writes it as ``min``/``max``.
 
-    Error contract: ``exit_initialization_mode`` raises the project's exceptions after logging
-    their message at error status (pythonfmu 0.7.0's binary turns any exception into fmi2Fatal
-    and logs only "unknown error", so the model's own line must be logged first); ``do_step``
-    refuses with a logged line and False (fmi2Discard). An unexpected exception in either is
-    logged with the instance name and its type instead of escaping unexplained.
+    Error contract with sonotrack's FMU binary (docs/fmi_binary.md): ``exit_initialization_mode``
+    raises the project's exceptions (:class:`ParameterError` for a refused parameter, the
+    message naming the instance, parameter, value and valid range), which the binary logs and
+    maps to fmi2Error; ``do_step`` refuses a bad input or step with a logged line and False
+    (fmi2Discard: the instance stays intact, the host may restore a state and go on).
     """
 
     hidden_state = ("core",)
@@ -84,10 +84,8 @@ class SonotrackSlave(Fmi2Slave):
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        if "do_step" in cls.__dict__:
-            cls.do_step = _guard_step(cls.__dict__["do_step"])
         if "exit_initialization_mode" in cls.__dict__:
-            cls.exit_initialization_mode = _guard_initialization(
+            cls.exit_initialization_mode = _checked_initialization(
                 cls.__dict__["exit_initialization_mode"])
 
     def __init__(self, **kwargs):
@@ -295,9 +293,7 @@ class SonotrackSlave(Fmi2Slave):
     def _set_fmu_state(self, state):
         problem = self._state_problem(state)
         if problem is not None:
-            message = f"{self.instance_name}: FMU state refused: {problem}"
-            self.log(message, Fmi2Status.error)
-            raise InputError(message)
+            raise InputError(f"{self.instance_name}: FMU state refused: {problem}")
         state = dict(state)
         hidden = state.pop("__hidden__", {})
         self._logged_once = set(state.pop("__logged_once__", []))
@@ -415,43 +411,18 @@ def _unknown(index, dependencies):
     }
 
 
-def _guard_step(do_step):
-    """Wrap a slave's ``do_step`` so an unexpected exception is a logged refusal (False)."""
-
-    @functools.wraps(do_step)
-    def guarded(self, current_time, step_size):
-        try:
-            return do_step(self, current_time, step_size)
-        except Exception as exc:  # reported with its type and the step, never swallowed
-            self.log(f"{self.instance_name}: doStep from t = {current_time!r} s by "
-                     f"{step_size!r} s failed: {type(exc).__name__}: {exc}", Fmi2Status.error)
-            return False
-
-    return guarded
-
-
-def _guard_initialization(exit_initialization_mode):
-    """Wrap ``exit_initialization_mode`` so every failure is logged with the model's message.
-
-    The exception still propagates (the binary maps it to fmi2Error, or pythonfmu 0.7.0's to
-    fmi2Fatal); the logged line is what the host shows.
-    """
+def _checked_initialization(exit_initialization_mode):
+    """Wrap ``exit_initialization_mode`` so the parameters are range-checked before the core."""
 
     @functools.wraps(exit_initialization_mode)
-    def guarded(self):
+    def checked(self):
+        if self.valid_ranges is not None:
+            self.check_parameters()
         try:
-            if self.valid_ranges is not None:
-                self.check_parameters()
             return exit_initialization_mode(self)
-        except SonotrackError as exc:
-            text = str(exc)
-            if not text.startswith(f"{self.instance_name}:"):
-                text = f"{self.instance_name}: {text}"
-            self.log(text, Fmi2Status.error)
-            raise
-        except Exception as exc:
-            self.log(f"{self.instance_name}: initialisation failed: {type(exc).__name__}: {exc}",
-                     Fmi2Status.error)
-            raise
+        except SonotrackError as exc:   # a core's refusal: name the instance too
+            if str(exc).startswith(f"{self.instance_name}: "):
+                raise
+            raise type(exc)(f"{self.instance_name}: {exc}") from exc
 
-    return guarded
+    return checked

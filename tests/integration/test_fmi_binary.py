@@ -365,11 +365,12 @@ _PROBE = textwrap.dedent('''
     """A probe slave: do_step does what the ``action`` input says."""
 
     from ..common.errors import InputError, StepRejectedError
-    from ..common.slave import Fmi2Status, SonotrackSlave
+    from ..common.slave import Fmi2Status, SonotrackSlave, load_ranges
 
 
     class Probe(SonotrackSlave):
         description = "status-mapping probe"
+        valid_ranges = load_ranges("probe")
 
         def __init__(self, **kwargs):
             super().__init__(**kwargs)
@@ -404,6 +405,17 @@ _PROBE = textwrap.dedent('''
 ''')
 
 
+# Every SonotrackSlave declares the valid range of each parameter and input.
+_PROBE_RANGES = textwrap.dedent('''
+    [step]
+    step_size = { type = "Real", unit = "s", min = 1e-6, max = 1.0 }
+    [inputs]
+    action = { type = "Integer", min = 0, max = 5 }
+    [parameters]
+    refuse_init = { type = "Boolean" }
+''')
+
+
 @pytest.fixture(scope="module")
 def probe(tmp_path_factory):
     import fmpy
@@ -415,6 +427,7 @@ def probe(tmp_path_factory):
     (components / "probe").mkdir()
     (components / "probe" / "__init__.py").write_text("")
     (components / "probe" / "fmu.py").write_text(_PROBE)
+    (components / "probe" / "ranges.toml").write_text(_PROBE_RANGES)
     path = build_fmu("Probe", root / "out", components_dir=components, packages={"Probe": "probe"})
     folder = root / "unzipped"
     fmpy.extract(str(path), str(folder))
