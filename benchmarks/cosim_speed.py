@@ -16,7 +16,12 @@ Measured side by side in one run (alternating repetitions, medians reported):
   and master overhead per instance step; that time plus our FMI calls, each at the cost of
   the cheapest one (``fmi2GetReal`` of one value), is a floor under our stepping time, and
   libcosim's time over it bounds the speed-up any master making these calls could show;
-* in-process: the same slave classes composed without FMI (``backend="in-process"``).
+* in-process: the same slave classes composed without FMI (``backend="in-process"``);
+* ``run_command``: a whole default ``sonotrack run`` command in a fresh process (as a user
+  types it, with its progress bar and plots; and with ``--no-plots``), split into start-up
+  (interpreter, imports, argument parsing), set-up (scenario, system, FMU instances),
+  stepping, summary (figures from results.csv, summary.json on disk), plots and exit, each as
+  a share of the command's wall time (timestamps from benchmarks/_run_phases.py).
 
 Writes benchmarks/results/cosim_speed.json.
 
@@ -25,6 +30,9 @@ Writes benchmarks/results/cosim_speed.json.
 
 import argparse
 import csv
+import json
+import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -46,6 +54,34 @@ def run_default(fmu_dir, backend, out):
     result = run_scenario(ROOT / "scenarios" / "s_curve.toml", out, progress=False,
                           fmu_dir=fmu_dir, plots=False, backend=backend)
     return result.summary
+
+
+PHASES = ("start-up", "set-up", "stepping", "summary", "plots", "exit")
+
+
+def run_command_phases(fmu_dir, out, plots=True):
+    """Time one whole ``sonotrack run`` (default scenario) in a fresh process, by phase."""
+    times = Path(str(out) + ".times.json")
+    command = [sys.executable, str(Path(__file__).resolve().parent / "_run_phases.py"),
+               str(times), "run", "scenarios/s_curve.toml", "--out", str(out),
+               "--fmu-dir", str(fmu_dir)] + ([] if plots else ["--no-plots"])
+    # as a user's shell runs it: Python caches bytecode (this session's environment turns
+    # that off, which would add compiling every module to every command's start-up)
+    environment = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    started = time.time()
+    subprocess.run(command, cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
+                   stderr=subprocess.DEVNULL, env=environment)
+    ended = time.time()
+    marks = json.loads(times.read_text())
+    phases = {
+        "start-up": marks["command_started"] - started,
+        "set-up": marks["stepping_started"] - marks["command_started"],
+        "stepping": marks["stepping_done"] - marks["stepping_started"],
+        "summary": marks["summary_written"] - marks["stepping_done"],
+        "plots": marks["run_returned"] - marks["summary_written"],
+        "exit": ended - marks["run_returned"],
+    }
+    return ended - started, phases
 
 
 def instance_steps(scenario_path):
@@ -220,6 +256,31 @@ def main(argv=None):
         print(f"default scenario run {r + 1}/{args.repeats}: RTF {fmi_rtf[-1]:.1f} (FMI), "
               f"{inprocess_rtf[-1]:.1f} (in-process)", flush=True)
 
+    # Whole commands, with and without plots, alternating; shares are taken per command. One
+    # command first, not counted, so bytecode and the FMU extraction cache exist as they do
+    # for a user's second command.
+    run_command_phases(fmu_dir, work / "command_warm_up", True)
+    commands = {"plots": [], "no_plots": []}
+    for r in range(args.repeats):
+        for name, plots in (("plots", True), ("no_plots", False)):
+            wall, phases = run_command_phases(fmu_dir, work / f"command_{name}{r}", plots)
+            commands[name].append((wall, phases))
+            print(f"sonotrack run ({name.replace('_', ' ')}) {r + 1}/{args.repeats}: "
+                  f"{wall:.2f} s, " + ", ".join(f"{p} {phases[p]:.2f}" for p in PHASES),
+                  flush=True)
+
+    def command_record(runs):
+        walls = [wall for wall, _ in runs]
+        shares = {p: median([phases[p] / wall for wall, phases in runs]) for p in PHASES}
+        return {
+            "wall_s": median(walls),
+            "wall_runs_s": walls,
+            "phases_s": {p: median([phases[p] for _, phases in runs]) for p in PHASES},
+            "phase_shares": shares,
+            "not_stepping_share": median([1 - phases["stepping"] / wall
+                                          for wall, phases in runs]),
+        }
+
     single = {}
     cases = {"RobotPlant": ({"voltage_left": 6.0, "voltage_right": 5.0}, 0.02),
              "WheelController": ({"v_ref": 0.3, "v_meas": 0.25}, 0.02)}
@@ -309,6 +370,21 @@ def main(argv=None):
         "instance_steps": scenario_steps,
         "us_per_instance_step": median(fmi_wall) / scenario_steps * 1e6,
         "single_fmu": single,
+        "run_command": {
+            "command": "sonotrack run scenarios/s_curve.toml --out DIR --fmu-dir DIR "
+                       "(progress bar on; stdout and stderr to /dev/null; bytecode caching on; "
+                       "after one uncounted command)",
+            "plots": command_record(commands["plots"]),
+            "no_plots": command_record(commands["no_plots"]),
+            "not_stepping_share_target": 0.40,
+            "note": "phases from wall-clock timestamps: start-up = process spawn to "
+                    "run_scenario entered (interpreter, imports, parsing; the timing wrapper "
+                    "imports orchestrator.run before parsing, which the CLI does after); set-up "
+                    "= to the first step; summary = last step to the final summary.json on "
+                    "disk; plots = summary on disk to run_scenario's return; exit = to the "
+                    "process's end (printing, interpreter exit). Medians over repeats; shares "
+                    "are medians of per-command shares.",
+        },
         "in_process_realtime_factor": median(inprocess_rtf),
         "fmi_over_in_process_wall_ratio": median(fmi_wall) / median(inprocess_wall),
         "fmi_over_in_process_target": 3.0,
@@ -343,6 +419,11 @@ def main(argv=None):
               f"{single_rate['model_compute_s']:.3f} s; {row['ours_fmi_calls']} FMI calls at "
               f">= {single_rate['fmi_call_floor_us']:.1f} us: stepping speed-up at most "
               f"{row['stepping_speedup_upper_bound']:.2f}x")
+    for name in ("plots", "no_plots"):
+        command = record["run_command"][name]
+        print(f"sonotrack run ({name.replace('_', ' ')}): {command['wall_s']:.2f} s; not "
+              f"stepping {command['not_stepping_share']:.0%} (target <= 40 %): " +
+              ", ".join(f"{p} {command['phase_shares'][p]:.0%}" for p in PHASES))
     print(f"wrote {out}")
     return 0
 

@@ -68,6 +68,7 @@ def _cmd_run(args):
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
     try:
         result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
+                              plots=not args.no_plots,
                               fmu_dir=args.fmu_dir, record_interval=args.record_interval,
                               fsync=args.fsync)
     except SonotrackError as exc:
@@ -130,7 +131,7 @@ def _workers(text):
     return value
 
 
-def _parser():
+def _parser(command=None):
     parser = argparse.ArgumentParser(prog="sonotrack", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -155,6 +156,8 @@ def _parser():
                      help="simulated seconds between recorded rows (default 0.02)")
     run.add_argument("--fsync", action="store_true",
                      help="fsync results.csv once a simulated second (default: at the end)")
+    run.add_argument("--no-plots", action="store_true",
+                     help="write no PNG plots (results.csv and summary.json only)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 
@@ -173,8 +176,11 @@ def _parser():
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
 
-    for register in _EXTRA_COMMANDS:
-        register(sub)
+    for name, (register, summary) in _EXTRA_COMMANDS.items():
+        if command in (None, name):
+            register(sub)
+        else:  # listed in --help, but its module is not imported for another command
+            sub.add_parser(name, help=summary)
     return parser
 
 
@@ -190,12 +196,26 @@ def _register_reproduce(sub):
     register_cli(sub)
 
 
-_EXTRA_COMMANDS = [_register_verify, _register_reproduce]
+# Sub-commands whose parsers live in their own, heavier modules (numpy, python-control):
+# imported only when that command runs (or for --help), so `sonotrack run` never pays for them.
+_EXTRA_COMMANDS = {
+    "verify": (_register_verify, "Routh-Hurwitz and python-control checks of the wheel-speed "
+                                 "loop, plant FMU vs transfer function"),
+    "reproduce": (_register_reproduce, "the paper's experiments in simulation beside the "
+                                       "paper's numbers"),
+}
+
+
+def _command_named(argv):
+    """The sub-command in ``argv`` (its first word that is not an option), or None."""
+    words = [a for a in argv if not a.startswith("-")]
+    return words[0] if words else None
 
 
 def main(argv=None):
     """Entry point of the ``sonotrack`` console script; returns the exit status."""
-    args = _parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = _parser(_command_named(argv)).parse_args(argv)
     try:
         return args.func(args)
     except SonotrackError as exc:
