@@ -131,10 +131,14 @@ class RunFolder:
     own_files : iterable of str
         Names of the files a run writes besides ``summary.json`` and ``results.csv`` (the
         plots); an older run's copies are removed when this run starts.
+    fsync : bool
+        fsync each summary and the folder after writing it (survives a power cut, not only a
+        kill); a sweep's runs leave it off (see :func:`orchestrator.run.run_scenario`).
     """
 
-    def __init__(self, path, own_files=()):
+    def __init__(self, path, own_files=(), fsync=True):
         self.path = Path(path)
+        self.fsync = fsync
         self.summary_json = self.path / SUMMARY_NAME
         self.results_csv = self.path / RESULTS_NAME
         self.own_files = tuple(own_files)
@@ -181,4 +185,4 @@ class RunFolder:
         if summary.get("status") not in STATUSES:
             raise ValueError(f"summary status {summary.get('status')!r} is not one of "
                              f"{', '.join(STATUSES)}")
-        atomic_write_json(self.summary_json, summary)
+        atomic_write_json(self.summary_json, summary, fsync=self.fsync)

@@ -106,7 +106,7 @@ BACKENDS = ("fmi", "in-process")
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
                  algorithm=None, record_interval=0.02, backend="fmi", fsync=False,
-                 system=None, handles=None):
+                 system=None, handles=None, sync_summary=True):
     """Run one scenario through our master on fmpy.
 
     The results folder is checked before anything runs; an older run's files in it are
@@ -145,6 +145,11 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         ``handles(instance_name, fmu_path)`` returns the FMU handle of an instance for the
         ``"fmi"`` backend (a sweep worker passes warm, reusable ones); default a new
         :class:`~orchestrator.fmu.FmuInstance` each.
+    sync_summary : bool
+        fsync ``summary.json`` (and its folder) at each write, so it survives a power cut. A
+        sweep's worker passes False (four fsyncs, most of a warm run's overhead):
+        ``results.csv`` is still fsync'ed before the summary can say ok, and a sweep runs
+        again any run whose summary is missing or unreadable.
 
     Returns
     -------
@@ -177,7 +182,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     order = system.stepping_order()
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
-    folder = RunFolder(out_dir, own_files=PLOT_FILES)
+    folder = RunFolder(out_dir, own_files=PLOT_FILES, fsync=sync_summary)
     folder.check()
     if backend == "fmi":
         make = handles or FmuInstance

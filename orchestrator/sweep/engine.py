@@ -6,9 +6,9 @@ whichever runs it:
 
 - :class:`LocalEngine` (the default): Dask's local process scheduler
   (:func:`dask.multiprocessing.get`) over a pool of worker processes that this engine keeps
-  for its whole life. The pool starts in milliseconds (processes are forked from this one when
-  it has no other threads, else from a clean fork server), and its workers keep FMUs loaded
-  and instances warm from one run, and one sweep, to the next.
+  for its whole life. The pool starts in milliseconds (its processes are forked from this
+  one; the sweep starts them before its progress bar starts a thread), and its workers keep
+  FMUs loaded and instances warm from one run, and one sweep, to the next.
 - :class:`ClusterEngine`: a ``dask.distributed`` scheduler given by address (``dask
   scheduler`` / ``dask worker`` on any machines that see the same files) or an existing
   ``Client``; the workers keep their instances warm the same way.
@@ -19,7 +19,6 @@ whichever runs it:
 import os
 import signal
 import socket
-import threading
 from urllib.parse import urlsplit
 
 from components.common.errors import ConfigError
@@ -47,16 +46,13 @@ def _process_id():
 
 
 def _pool_context():
+    """Fork where the platform has it: workers start in milliseconds with this process's
+    imports, and (unlike spawn or a fork server) never re-run the caller's main script, which
+    a script without an ``if __name__ == "__main__"`` guard would turn into a second sweep."""
     import multiprocessing
 
-    methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
+    if "fork" in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("fork")
-    if "forkserver" in methods:
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(["orchestrator.sweep.worker", "orchestrator.run",
-                                        "orchestrator.system", "fmpy"])
-        return context
     return multiprocessing.get_context("spawn")
 
 

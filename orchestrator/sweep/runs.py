@@ -116,6 +116,9 @@ def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, pr
         if own:
             engine = open_engine(scheduler, workers)
         result.engine = engine.name
+        # workers first: a local pool forks fastest from a process with one thread, and the
+        # progress bar starts a monitor thread
+        engine.start()
         by_key = {run.key: run for run in pending}
         bar = _bar(len(planned), result.reused, label) if progress else None
         fmu_dir = str(Path(fmu_dir).resolve()) if fmu_dir is not None else None

@@ -212,11 +212,10 @@ def _run(task, warm):
         return instance
 
     run_dir = Path(task.run_dir)
-    (run_dir / "summary.json").unlink(missing_ok=True)
     try:
         result = run_scenario(scenario, run_dir, progress=False, fmu_dir=task.fmu_dir,
                               plots=False, record_interval=task.record_interval,
-                              system=system, handles=handle)
+                              system=system, handles=handle, sync_summary=False)
     except BaseException:
         for *_, instance in taken:
             _release(instance)

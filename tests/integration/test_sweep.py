@@ -234,3 +234,19 @@ def test_bad_sweep_arguments_give_one_line_and_a_nonzero_exit(fmu_dir, tmp_path,
     assert fragment in lines[0]
     assert "Traceback" not in completed.stderr
     assert not (tmp_path / "sweep" / "runs").exists()
+
+
+def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
+    from orchestrator.sweep import LocalEngine, run_many
+
+    base = _short(0.5)
+    draws = [base.with_overrides(seed=seed, parameters={"plant.mass": mass})
+             for seed, mass in ((1, 4.4), (2, 4.6))]
+    with LocalEngine(workers=1) as engine:
+        first = run_many(draws, tmp_path / "mc", engine=engine, progress=False)
+        second = run_many(draws + [base.with_overrides(seed=3)], tmp_path / "mc",
+                          engine=engine, progress=False)
+    assert [(r["scenario"], r["seed"], r["status"]) for r in first.rows] == [
+        ("static_case1", 1, "ok"), ("static_case1", 2, "ok")]
+    assert (second.computed, second.reused) == (1, 2)
+    assert second.rows[:2] == first.rows

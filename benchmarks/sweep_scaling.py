@@ -1,0 +1,280 @@
+"""Sweep throughput: a serial loop, the local 2-worker engine and a real Dask cluster.
+
+Measured in one run, interleaved (each repetition runs every variant once, close together in
+time; ratios are taken within a repetition and their medians reported):
+
+* ``serial``: a fresh Python process runs the 16 runs (5 s of the default S-curve, seeds 1-16)
+  in a plain loop of ``run_scenario``;
+* ``local``: a fresh Python process runs the same 16 runs with ``sweep(..., workers=2)`` (Dask's
+  local process scheduler over two warm worker processes);
+* ``cluster`` (if it can be started here): a fresh Python process runs them with
+  ``sweep(..., scheduler=ADDRESS)`` against a ``dask scheduler`` and two ``dask worker``
+  processes started once before the repetitions (their start-up is reported apart).
+
+Every wall time is the whole child process, start-up and exit included, into a fresh folder
+(nothing reused). Then, in this process: the overhead of a run in a warm worker beyond its
+stepping (``run_task`` on kept instances, minus the time in ``Master.run``), and runs per
+second per core of the local 2-worker engine on the full default S-curve (30 s).
+
+This machine has 2 cores shared with other work: the load average is recorded beside every
+figure, and targets are judged on the medians as measured.
+
+Writes benchmarks/results/sweep_scaling.json.
+
+    python benchmarks/sweep_scaling.py [--repeats 3] [--runs 16] [--stop-time 5]
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import build_fresh, median, write_result  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIO = ROOT / "scenarios" / "s_curve.toml"
+FMUS = ["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner", "WheelController"]
+
+_CHILD = """
+import json, sys
+from orchestrator.scenario import load_scenario
+variant, out, fmu_dir, runs, stop_time, address = sys.argv[1:7]
+base = load_scenario({scenario!r}).with_overrides(stop_time=float(stop_time))
+seeds = list(range(1, int(runs) + 1))
+if variant == "serial":
+    from orchestrator.run import run_scenario
+    rows = [run_scenario(base.with_overrides(seed=seed), f"{{out}}/{{seed}}", progress=False,
+                         fmu_dir=fmu_dir, plots=False).summary for seed in seeds]
+else:
+    from orchestrator.sweep import sweep
+    options = {{"workers": 2}} if variant == "local" else {{"scheduler": address}}
+    result = sweep(base, {{}}, out, seeds=seeds, fmu_dir=fmu_dir, progress=False, **options)
+    assert result.computed == len(seeds) and result.failed == 0, result.rows
+    rows = result.rows
+print(json.dumps([[r["seed"], r["status"], r.get("final_distance_to_source_m")] for r in rows]))
+"""
+
+
+def _environment():
+    # as a user's shell runs Python: bytecode cached (this session's environment turns it off)
+    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
+
+def timed_child(variant, out, fmu_dir, runs, stop_time, address=""):
+    """Wall time of one whole child process running the runs, and its rows."""
+    script = _CHILD.format(scenario=str(SCENARIO))
+    load = os.getloadavg()[0]
+    started = time.perf_counter()
+    completed = subprocess.run(
+        [sys.executable, "-c", script, variant, str(out), str(fmu_dir), str(runs),
+         str(stop_time), address], cwd=ROOT, capture_output=True, text=True, check=True,
+        env=_environment())
+    wall = time.perf_counter() - started
+    rows = json.loads(completed.stdout.strip().splitlines()[-1])
+    return wall, rows, load
+
+
+def _dask():
+    return str(Path(sys.executable).with_name("dask"))
+
+
+def start_cluster(work):
+    """Start a dask scheduler and two workers on 127.0.0.1; return (address, processes, s)."""
+    scheduler_file = work / "scheduler.json"
+    common = {"cwd": work, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL,
+              "env": _environment()}
+    started = time.perf_counter()
+    processes = [subprocess.Popen([_dask(), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                                   "--no-dashboard", "--scheduler-file", str(scheduler_file)],
+                                  **common)]
+    try:
+        deadline = time.monotonic() + 60
+        while not scheduler_file.is_file():
+            if processes[0].poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError("dask scheduler did not start")
+            time.sleep(0.1)
+        address = json.loads(scheduler_file.read_text())["address"]
+        for _ in range(2):
+            processes.append(subprocess.Popen(
+                [_dask(), "worker", address, "--nthreads", "1", "--no-dashboard",
+                 "--host", "127.0.0.1", "--local-directory", str(work / "dask")], **common))
+        from distributed import Client
+
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(2, timeout=90)
+    except BaseException:
+        stop_cluster(processes)
+        raise
+    return address, processes, time.perf_counter() - started
+
+
+def stop_cluster(processes):
+    for process in processes:
+        if process.poll() is None:
+            process.terminate()
+    for process in processes:
+        try:
+            process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=10)
+
+
+def warm_overhead(fmu_dir, work, runs, stop_time):
+    """Per run in one warm worker: (total, stepping, overhead) in s for runs 2..N."""
+    import orchestrator.master as master
+    from orchestrator.scenario import load_scenario
+    from orchestrator.sweep.worker import RunTask, WarmInstances, run_task
+
+    stepping = []
+    original = master.Master.run
+
+    def timed(self, *args, **kwargs):
+        started = time.perf_counter()
+        try:
+            return original(self, *args, **kwargs)
+        finally:
+            stepping.append(time.perf_counter() - started)
+
+    master.Master.run = timed
+    warm = WarmInstances()
+    base = load_scenario(SCENARIO).with_overrides(stop_time=stop_time)
+    totals = []
+    try:
+        for seed in range(1, runs + 1):
+            started = time.perf_counter()
+            summary = run_task(RunTask(base.with_overrides(seed=seed), str(work / f"w{seed}"),
+                                       f"w{seed}", str(fmu_dir)), warm=warm)
+            totals.append(time.perf_counter() - started)
+            assert summary["status"] == "ok", summary
+    finally:
+        master.Master.run = original
+        warm.clear()
+    return [(t, s, t - s) for t, s in zip(totals[1:], stepping[1:])], warm.reused
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--runs", type=int, default=16)
+    parser.add_argument("--stop-time", type=float, default=5.0)
+    parser.add_argument("--s-curve-runs", type=int, default=6,
+                        help="runs of the full default S-curve for runs per second per core")
+    parser.add_argument("--no-cluster", action="store_true")
+    args = parser.parse_args(argv)
+
+    fmus = build_fresh(FMUS)
+    fmu_dir = next(iter(fmus.values())).parent
+    work = Path(tempfile.mkdtemp(prefix="sonotrack_sweep_scaling_"))
+    # one uncounted run: bytecode and the FMU extraction cache exist, as for a user's 2nd sweep
+    timed_child("serial", work / "warm_up", fmu_dir, 1, 0.1)
+
+    cluster = None
+    cluster_error = None
+    if not args.no_cluster:
+        try:
+            cluster = start_cluster(work)
+            print(f"dask scheduler and 2 workers up in {cluster[2]:.2f} s at {cluster[0]}",
+                  flush=True)
+        except Exception as error:  # reported in the JSON, not hidden
+            cluster_error = f"{type(error).__name__}: {error}"
+            print(f"no cluster: {cluster_error}", flush=True)
+
+    variants = ["serial", "local"] + (["cluster"] if cluster else [])
+    walls = {v: [] for v in variants}
+    loads = {v: [] for v in variants}
+    reference = None
+    rows_equal = True
+    try:
+        for r in range(args.repeats):
+            for variant in variants:
+                wall, rows, load = timed_child(variant, work / f"{variant}{r}", fmu_dir,
+                                               args.runs, args.stop_time,
+                                               cluster[0] if cluster else "")
+                walls[variant].append(wall)
+                loads[variant].append(load)
+                reference = reference or rows
+                rows_equal = rows_equal and rows == reference
+                print(f"repetition {r + 1}/{args.repeats}: {variant} {wall:.2f} s "
+                      f"(load {load:.1f})", flush=True)
+    finally:
+        if cluster:
+            stop_cluster(cluster[1])
+
+    speedups = {v: [s / w for s, w in zip(walls["serial"], walls[v])] for v in variants}
+    overhead_runs, reused = warm_overhead(fmu_dir, work / "warm", 12, args.stop_time)
+    overheads = [o for _, _, o in overhead_runs]
+    print(f"warm worker: overhead beyond stepping {median(overheads) * 1e3:.1f} ms per run",
+          flush=True)
+
+    s_curve_load = os.getloadavg()[0]
+    started = time.perf_counter()
+    _, rows, _ = timed_child("local", work / "s_curve", fmu_dir, args.s_curve_runs, 30.0)
+    s_curve_wall = time.perf_counter() - started
+
+    load_all = [x for v in variants for x in loads[v]]
+    speedup = median(speedups["local"])
+    record = {
+        "scenario": "scenarios/s_curve.toml",
+        "runs": args.runs,
+        "stop_time_s": args.stop_time,
+        "repeats": args.repeats,
+        "variants": {
+            v: {"wall_s": median(walls[v]), "wall_runs_s": walls[v],
+                "runs_per_s": args.runs / median(walls[v]),
+                "speedup_over_serial": median(speedups[v]),
+                "speedup_runs": speedups[v], "load_average_1min": loads[v]}
+            for v in variants},
+        "rows_equal_across_variants": rows_equal,
+        "cluster": ({"started": True, "start_up_s": cluster[2], "workers": 2,
+                     "note": "dask scheduler + 2 dask workers (--nthreads 1) on 127.0.0.1, "
+                             "started once before the repetitions; their start-up is not in "
+                             "the cluster wall times, the client's connection is"}
+                    if cluster else {"started": False, "error": cluster_error}),
+        "speedup_local_2_workers_over_serial": speedup,
+        "speedup_target": 1.8,
+        "speedup_target_met": speedup >= 1.8,
+        "warm_worker": {
+            "runs": len(overhead_runs), "instances_reused": reused,
+            "overhead_per_run_ms": median(overheads) * 1e3,
+            "overhead_runs_ms": [o * 1e3 for o in overheads],
+            "stepping_per_run_ms": median([s for _, s, _ in overhead_runs]) * 1e3,
+            "total_per_run_ms": median([t for t, _, _ in overhead_runs]) * 1e3,
+            "overhead_target_ms": 20.0,
+            "overhead_target_met": median(overheads) * 1e3 <= 20.0,
+            "note": "run_task on kept instances (fmi2Reset) in this process; overhead = its "
+                    "time minus Master.run (stepping and recording); runs 2..N",
+        },
+        "s_curve_full": {
+            "runs": args.s_curve_runs, "stop_time_s": 30.0, "workers": 2,
+            "wall_s": s_curve_wall, "load_average_1min": s_curve_load,
+            "runs_per_s_per_core": args.s_curve_runs / s_curve_wall / 2,
+            "note": "whole child process (start-up included), local engine, 2 workers",
+        },
+        "machine_load": {
+            "cores": os.cpu_count(),
+            "load_average_1min_median": median(load_all),
+            "note": "other work shared these cores during the measurement (load average "
+                    "above the core count means runnable processes waited for a core); the "
+                    "figures are what was measured, not corrected for it",
+        },
+    }
+    out = write_result("sweep_scaling", record)
+    print(f"local 2-worker engine over serial: {speedup:.2f}x (target >= 1.8"
+          f"{'' if speedup >= 1.8 else ', not met'})" +
+          (f"; cluster {record['variants']['cluster']['speedup_over_serial']:.2f}x"
+           if cluster else "") +
+          f"; warm overhead {record['warm_worker']['overhead_per_run_ms']:.1f} ms "
+          f"(target <= 20); S-curve {record['s_curve_full']['runs_per_s_per_core']:.3f} "
+          f"runs/s/core; load {median(load_all):.1f} on {os.cpu_count()} cores")
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
