@@ -22,6 +22,16 @@ PLOT_FILES = ("trajectories.png", "wheel_speeds.png", "gains.png", "localizer.pn
 _MARGINS = {"left": 0.11, "right": 0.97, "bottom": 0.1, "top": 0.9, "hspace": 0.12}
 
 
+def _figure():
+    """pyplot on the Agg backend (for other reports' plots; a run's plots do not use it)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
 class _Figures:
     """Makes figures on an Agg canvas without pyplot."""
 
