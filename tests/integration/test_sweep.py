@@ -187,11 +187,7 @@ def test_a_real_scheduler_and_two_workers_give_the_local_engines_rows(fmu_dir, t
         [_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
          "--scheduler-file", str(scheduler_file)], **common)]
     try:
-        deadline = time.monotonic() + 60
-        while not scheduler_file.is_file() and time.monotonic() < deadline:
-            assert processes[0].poll() is None, "dask scheduler exited"
-            time.sleep(0.2)
-        address = json.loads(scheduler_file.read_text())["address"]
+        address = _scheduler_address(scheduler_file, processes[0], timeout=60)
         assert address.startswith("tcp://127.0.0.1:")
         for _ in range(2):
             processes.append(subprocess.Popen(
@@ -250,3 +246,15 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
         ("static_case1", 1, "ok"), ("static_case1", 2, "ok")]
     assert (second.computed, second.reused) == (1, 2)
     assert second.rows[:2] == first.rows
+
+
+def _scheduler_address(scheduler_file, process, timeout):
+    """The address the scheduler wrote, once the file holds whole JSON (it is not written atomically)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert process.poll() is None, "dask scheduler exited"
+        try:
+            return json.loads(scheduler_file.read_text())["address"]
+        except (FileNotFoundError, json.JSONDecodeError, KeyError):
+            time.sleep(0.2)
+    raise AssertionError(f"dask scheduler wrote no address to {scheduler_file} in {timeout} s")
