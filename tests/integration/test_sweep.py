@@ -239,8 +239,8 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
     draws = [base.with_overrides(seed=seed, parameters={"plant.mass": mass})
              for seed, mass in ((1, 4.4), (2, 4.6))]
     with LocalEngine(workers=1) as engine:
-        first = run_many(draws, tmp_path / "mc", engine=engine, progress=False)
-        second = run_many(draws + [base.with_overrides(seed=3)], tmp_path / "mc",
+        first = run_many(draws, tmp_path / "mc", fmu_dir=fmu_dir, engine=engine, progress=False)
+        second = run_many(draws + [base.with_overrides(seed=3)], tmp_path / "mc", fmu_dir=fmu_dir,
                           engine=engine, progress=False)
     assert [(r["scenario"], r["seed"], r["status"]) for r in first.rows] == [
         ("static_case1", 1, "ok"), ("static_case1", 2, "ok")]
