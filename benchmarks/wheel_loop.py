@@ -31,6 +31,7 @@ CASE1 = {"left": (0.342, 0.342, 2.528), "right": (0.258, 0.258, 1.9)}  # v, a, d
 CONFIGS = {
     "fgs_pd": {"mode": "fgs_pd"},
     "fgs_pd_mamdani": {"mode": "fgs_pd", "fuzzy_method": "mamdani"},
+    "fgs_pd_pure": {"mode": "fgs_pd", "trim_ki": 0.0},
     "pd": {"mode": "pd"},
     "pid": {"mode": "pid"},
     "pid_no_feedforward": {"mode": "pid", "feedforward": False},

@@ -185,7 +185,7 @@ def _parser(command=None):
 
 
 def _register_verify(sub):
-    from orchestrator.verification import register_cli
+    from orchestrator.verify import register_cli
 
     register_cli(sub)
 

@@ -131,6 +131,12 @@ def link(text, relative_path):
     return _Raw(f'<a href="{html.escape(target, quote=True)}">{html.escape(str(text))}</a>')
 
 
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _text(value):
     return value if isinstance(value, _Raw) else html.escape(str(value))
 
@@ -316,6 +322,7 @@ class HtmlReport:
         try:
             with os.fdopen(fd, "w", encoding="utf-8") as stream:
                 stream.write(self.render())
+            os.chmod(temporary, 0o666 & ~_umask())  # mkstemp's 0600 would hide it from others
             os.replace(temporary, path)
         except BaseException:
             Path(temporary).unlink(missing_ok=True)

@@ -14,8 +14,13 @@ where ``g = volts_per_speed`` is the motor's steady-state voltage per rim speed.
 thus a speed correction ``kp e + kd (e_range / de_range) de`` in m/s, turned into volts by the
 same motor constant as the feedforward: ``kp`` is the dimensionless proportional loop gain at
 DC, whatever the motor. The feedforward supplies the voltage the reference speed needs, so
-the PD law has no steady-state error when ``g`` matches the motor; a mismatch ``g_motor (1 +
-delta)`` leaves ``e_ss = -delta v_ref / (1 + (1 + delta) kp)``.
+the pure PD law has no steady-state error only when ``g`` matches the motor; a mismatch
+``g_motor (1 + delta)`` leaves ``e_ss = -delta v_ref / (1 + (1 + delta) kp)``.
+
+Integral trim (the PD form chosen, docs/control.md): the fgs_pd and pd modes add
+``ki I`` with ``ki = trim_ki`` [1/s] and ``I`` the time integral of ``e_n`` (the PID's
+integrator and anti-windup, :class:`.PidLaw`), so the steady-state error is zero for any
+motor constant the loop is stable with. ``trim_ki = 0`` gives the pure PD of Eq. (46).
 """
 
 import math
@@ -44,6 +49,7 @@ DEFAULTS = {
     "volts_per_speed": _VOLTS_PER_SPEED,
     "feedforward": True,
     "fuzzy_method": "weighted",
+    "trim_ki": 0.5,
 }
 
 
@@ -73,6 +79,9 @@ class WheelSpeedController:
         Add ``volts_per_speed * v_ref``.
     fuzzy_method : {"weighted", "mamdani"}
         Defuzzification of the FGS-PD fuzzy system (see :class:`.FuzzyGainScheduler`).
+    trim_ki : float
+        Integral trim of the fgs_pd and pd modes [1/s] on the time integral of ``e_n``;
+        0 switches it off (a pure PD, steady-state error unless the feedforward is exact).
 
     Attributes
     ----------
@@ -95,7 +104,8 @@ class WheelSpeedController:
         for name in ("e_range", "de_range", "v_supply", "volts_per_speed"):
             if not (math.isfinite(p[name]) and p[name] > 0.0):
                 problems.append(f"{name} = {p[name]!r} must be a positive finite number")
-        for name in ("pid_kp", "pid_ki", "pid_kd", "pd_kp", "pd_kd", "derivative_time_constant"):
+        for name in ("pid_kp", "pid_ki", "pid_kd", "pd_kp", "pd_kd", "derivative_time_constant",
+                     "trim_ki"):
             if not (math.isfinite(p[name]) and p[name] >= 0.0):
                 problems.append(f"{name} = {p[name]!r} must be finite and >= 0")
         for name in ("kp", "kd"):
@@ -120,6 +130,10 @@ class WheelSpeedController:
         self.derivative = FilteredDerivative(float(p["derivative_time_constant"]))
         self.pid = PidLaw(p["pid_kp"], p["pid_ki"], p["pid_kd"],
                           integral_limit=self.v_supply / self.to_voltage)
+        self.trim_ki = float(p["trim_ki"])
+        # The trim is the PID's integrator with the PD gains of the step (set before use).
+        self.trim = PidLaw(0.0, self.trim_ki, 0.0,
+                           integral_limit=self.v_supply / self.to_voltage)
         self.error = 0.0
         self.error_rate = 0.0
         self.kp, self.kd = self._initial_gains()
@@ -175,8 +189,13 @@ class WheelSpeedController:
                 kp_n, kd_n = self.scheduler.evaluate_normalised(e_n, de_n)
                 self.kp = (self.kp_max - self.kp_min) * kp_n + self.kp_min
                 self.kd = (self.kd_max - self.kd_min) * kd_n + self.kd_min
-            raw = offset + self.to_voltage * (self.kp * e_n + self.kd * de_n)
-            voltage = limit if raw > limit else (-limit if raw < -limit else raw)
+            if self.trim_ki > 0.0:
+                trim = self.trim
+                trim.kp, trim.kd = self.kp, self.kd
+                voltage = trim.output(e_n, de_n, h, self.to_voltage, offset, limit)
+            else:
+                raw = offset + self.to_voltage * (self.kp * e_n + self.kd * de_n)
+                voltage = limit if raw > limit else (-limit if raw < -limit else raw)
         self.error = error
         self.error_rate = rate
         self.voltage = voltage
@@ -186,6 +205,7 @@ class WheelSpeedController:
         """Return to the state after construction (integrator and filter emptied)."""
         self.derivative.reset()
         self.pid.reset()
+        self.trim.reset()
         self.error = 0.0
         self.error_rate = 0.0
         self.kp, self.kd = self._initial_gains()

@@ -21,6 +21,8 @@ _REAL_PARAMETERS = (
     ("derivative_time_constant", "s", "time constant of the derivative low-pass"),
     ("volts_per_speed", "V.s/m",
      "steady-state motor voltage per rim speed; scales feedforward and PD output"),
+    ("trim_ki", "Hz", "integral trim of fgs_pd and pd on the integral of e / e_range "
+                      "(0: pure PD)"),
 )
 
 

@@ -16,7 +16,7 @@ _spec.loader.exec_module(wheel_loop)
 
 @pytest.fixture(scope="module")
 def results():
-    configs = {name: wheel_loop.CONFIGS[name] for name in ("fgs_pd", "pid")}
+    configs = {name: wheel_loop.CONFIGS[name] for name in ("fgs_pd", "fgs_pd_pure", "pid")}
     return wheel_loop.compare(configs)
 
 
@@ -27,11 +27,23 @@ _CLAIM_NOT_SUPPORTED = (
     "earlier pass came from the first-order plant's integration error. Reported, not tuned.")
 
 
-@pytest.mark.parametrize("side", [
-    "left", pytest.param("right", marks=pytest.mark.xfail(strict=True, reason=_CLAIM_NOT_SUPPORTED)),
-], ids=["left", "right"])
-def test_fgs_pd_overshoots_no_more_than_pid(results, side):
-    assert (results["fgs_pd"][side]["overshoot_percent"]
+_TRIM_ADDS_OVERSHOOT = (
+    "Paper claim not supported with the integral trim (the default form, docs/control.md): "
+    "the trim integrates the ramp lag and overshoots by it, FGS-PD 2.61 / 4.44 % against "
+    "2.19 / 3.30 % for the PID (benchmarks/wheel_loop.py). Reported, not tuned.")
+
+
+@pytest.mark.parametrize("form,side", [
+    ("fgs_pd_pure", "left"),
+    pytest.param("fgs_pd_pure", "right",
+                 marks=pytest.mark.xfail(strict=True, reason=_CLAIM_NOT_SUPPORTED)),
+    pytest.param("fgs_pd", "left", marks=pytest.mark.xfail(strict=True,
+                                                           reason=_TRIM_ADDS_OVERSHOOT)),
+    pytest.param("fgs_pd", "right", marks=pytest.mark.xfail(strict=True,
+                                                            reason=_TRIM_ADDS_OVERSHOOT)),
+], ids=["pure-left", "pure-right", "trim-left", "trim-right"])
+def test_fgs_pd_overshoots_no_more_than_pid(results, form, side):
+    assert (results[form][side]["overshoot_percent"]
             <= results["pid"][side]["overshoot_percent"])
 
 

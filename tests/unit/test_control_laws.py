@@ -66,17 +66,48 @@ def test_pid_integral_reaches_limit_only_through_integration():
 @pytest.mark.parametrize("delta", [0.0, 0.1, -0.2, 0.5], ids=["exact", "+10%", "-20%", "+50%"])
 def test_pd_feedforward_steady_state_error_matches_analysis(delta):
     # g_ctrl = g_true (1 + delta): e_ss = -delta v_ref / (1 + (1 + delta) kp).
+    # The pure PD of Eq. (46) (integral trim off).
     kp = DEFAULTS["pd_kp"]
     g_ctrl = DEFAULTS["volts_per_speed"]
-    ctl = WheelSpeedController(mode="pd")
+    ctl = WheelSpeedController(mode="pd", trim_ki=0.0)
     v_ref = 0.3
     v = _first_order_loop(ctl, v_ref, g_ctrl / (1.0 + delta), 2000)
     expected = -delta * v_ref / (1.0 + (1.0 + delta) * kp)
     assert v_ref - v == pytest.approx(expected, abs=1e-9)
 
 
+@pytest.mark.parametrize("mode", ["pd", "fgs_pd"])
+@pytest.mark.parametrize("delta", [-0.75, -0.5, 0.0, 1.0, 3.0],
+                         ids=["needs-4x-voltage", "needs-2x", "exact", "needs-half", "needs-quarter"])
+def test_integral_trim_removes_the_steady_state_error_for_any_motor_constant(mode, delta):
+    # Final value theorem: with the trim's integrator in the loop the error's final value is
+    # 0 for every g_true the loop is stable with; the pure PD's would be the formula above.
+    g_ctrl = DEFAULTS["volts_per_speed"]
+    v_ref = 0.3
+    ctl = WheelSpeedController(mode=mode)
+    assert ctl.trim_ki == DEFAULTS["trim_ki"] > 0.0
+    # The slowest mode (needs-4x) decays with ~7.5 s: 400 s leave e^-50 of the start error.
+    v = _first_order_loop(ctl, v_ref, g_ctrl / (1.0 + delta), 20_000)
+    assert abs(v_ref - v) < 1e-6 * v_ref
+    pure = _first_order_loop(WheelSpeedController(mode="pd", trim_ki=0.0), v_ref,
+                             g_ctrl / (1.0 + delta), 3000)
+    kp = DEFAULTS["pd_kp"]
+    assert v_ref - pure == pytest.approx(-delta * v_ref / (1.0 + (1.0 + delta) * kp), abs=1e-9)
+
+
+def test_integral_trim_is_the_pid_integrator_with_the_pd_gains():
+    trimmed = WheelSpeedController(mode="pd", trim_ki=0.7, feedforward=False)
+    pid = WheelSpeedController(mode="pid", pid_kp=DEFAULTS["pd_kp"], pid_kd=DEFAULTS["pd_kd"],
+                               pid_ki=0.7, feedforward=False)
+    rng = np.random.default_rng(3)
+    for v_ref, v_meas in rng.uniform(-0.6, 0.6, size=(300, 2)):  # saturates at times
+        assert trimmed.step(v_ref, v_meas, H) == pid.step(v_ref, v_meas, H)
+    trimmed.reset()
+    assert trimmed.trim.integral == 0.0
+
+
 def test_pd_without_feedforward_keeps_proportional_error():
-    ctl = WheelSpeedController(mode="pd", feedforward=False)
+    ctl = WheelSpeedController(mode="pd", feedforward=False, trim_ki=0.0)
     v_ref = 0.3
     v = _first_order_loop(ctl, v_ref, DEFAULTS["volts_per_speed"], 2000)
     assert v_ref - v == pytest.approx(v_ref / (1.0 + DEFAULTS["pd_kp"]), rel=1e-9)
@@ -85,7 +116,7 @@ def test_pd_without_feedforward_keeps_proportional_error():
 @pytest.mark.parametrize("method", ["weighted", "mamdani"], ids=["weighted", "mamdani"])
 def test_fgs_pd_with_matched_feedforward_has_no_steady_state_error(method):
     ctl = WheelSpeedController(mode="fgs_pd", fuzzy_method=method)
-    v = _first_order_loop(ctl, 0.342, DEFAULTS["volts_per_speed"], 2000)
+    v = _first_order_loop(ctl, 0.342, DEFAULTS["volts_per_speed"], 20_000)  # trim tail: ~5 s
     assert abs(0.342 - v) < 1e-9
     # At rest on the reference (e = de = 0, rule Z/Z) both Kp' and Kd' are Big.
     big = 1.0 if method == "weighted" else 2.0 / 3.0

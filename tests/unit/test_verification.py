@@ -8,7 +8,7 @@ import pytest
 
 from components.control import DEFAULTS
 from components.plant import PlantParameters, steady_wheel_speed
-from orchestrator.verification import (
+from orchestrator.verify import (
     WheelLoopModel, analyse_gains, continuous_gain_bound, controller_cross_check,
     linear_wheel_model, register_cli, stability_boundary,
 )
@@ -117,4 +117,5 @@ def test_register_cli_adds_verify_with_default_out_dir():
     register_cli(parser.add_subparsers(dest="command"))
     args = parser.parse_args(["verify"])
     assert args.out == "runs/verify" and args.grid == 11 and callable(args.func)
+    assert not args.strict and parser.parse_args(["verify", "--strict"]).strict
     assert parser.parse_args(["verify", "--out", "x"]).out == "x"

@@ -1,0 +1,31 @@
+"""`sonotrack verify`: the wheel-speed loop's checks with verdicts and their reports.
+
+Modules: :mod:`.loop_model` (the sampled loop), :mod:`.analysis` (poles, margins, edges,
+Routh), :mod:`.robustness` (other plants), :mod:`.measure` (the figures of a run),
+:mod:`.fmu_runs` (the built FMUs against the models), :mod:`.checks` (requirements and
+verdicts), :mod:`.figures`, :mod:`.markdown`, :mod:`.html_page`, :mod:`.report`
+(:func:`verify`) and :mod:`.cli`.
+"""
+
+from .analysis import (
+    KP_SEARCH_MAX, GainAnalysis, analyse_gains, continuous_gain_bound, controller_cross_check,
+    kp_edge, routh_bounds, stability_boundary,
+)
+from .checks import Check, exit_status, load_requirements
+from .cli import register_cli
+from .fmu_runs import (
+    closed_loop_fmu_comparison, compliance_bound, controller_fmu_comparison, fmu_step_comparison,
+)
+from .loop_model import LinearWheelModel, WheelLoopModel, linear_wheel_model
+from .report import DEFAULT_OUT_DIR, VerificationReport, verify
+from .robustness import PlantVariant, robustness_point, steady_state_error
+
+__all__ = [
+    "KP_SEARCH_MAX", "GainAnalysis", "analyse_gains", "continuous_gain_bound",
+    "controller_cross_check", "kp_edge", "routh_bounds", "stability_boundary",
+    "Check", "exit_status", "load_requirements", "register_cli",
+    "closed_loop_fmu_comparison", "compliance_bound", "controller_fmu_comparison",
+    "fmu_step_comparison", "LinearWheelModel", "WheelLoopModel", "linear_wheel_model",
+    "DEFAULT_OUT_DIR", "VerificationReport", "verify",
+    "PlantVariant", "robustness_point", "steady_state_error",
+]

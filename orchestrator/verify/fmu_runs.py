@@ -1,0 +1,380 @@
+"""The built FMUs against the models the analyses use.
+
+- :func:`fmu_step_comparison`: RobotPlant FMU, voltage step, against the wheel's u/V.
+- :func:`controller_fmu_comparison`: WheelController FMU, random inputs, against the law
+  recomputed independently here.
+- :func:`closed_loop_fmu_comparison`: RobotPlant + WheelController FMUs connected and run by
+  :class:`orchestrator.master.Master` at the loop's period, against the closed-loop TF.
+"""
+
+import math
+import tempfile
+from dataclasses import fields
+
+import numpy as np
+
+from components.common.errors import ConfigError, SimulationError
+from components.plant.parameters import PlantParameters
+
+from .loop_model import linear_wheel_model
+
+__all__ = ["fmu_step_comparison", "fmu_variants", "compliance_bound",
+           "controller_fmu_comparison", "controller_law_reference",
+           "closed_loop_fmu_comparison"]
+
+
+def compliance_bound(parameters, voltage):
+    """Largest rim-minus-ground speed the tyre's compliance can add in a voltage step [m/s].
+
+    The TF is rigid (rim speed = ground speed). The plant's tyre transmits ``F = c N s`` with
+    slip ``s = (rim - ground) / d``, ``d <= |rim|``, so ``rim - ground <= F |rim| / (c N)``.
+    The rim force is largest at the start, ``F <= (m/2) a0`` with ``a0 = v_final / tau``, and
+    ``|rim| <= v_final``: the bound is ``(m/2) v_final^2 / (tau c N)`` (5.3 mm/s at 2 V).
+    """
+    linear = linear_wheel_model(parameters)
+    v_final = voltage * linear.dc_gain
+    _, tau = linear.time_constants
+    normal = 0.5 * parameters.mass * parameters.gravity
+    return 0.5 * parameters.mass * v_final ** 2 / (tau * parameters.slip_stiffness * normal)
+
+
+def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, fmu_dir=None,
+                        variants=None, fmu_overrides=None):
+    """Step the built RobotPlant FMU with a voltage on both wheels; compare with u/V.
+
+    Parameters
+    ----------
+    parameters : PlantParameters, optional
+        Sent to the FMU and used for the transfer function.
+    voltage : float, optional
+        Step height on both wheels [V] (default 2 V: 0.45 m/s, the tracking speed range).
+    duration, step : float, optional
+        Length and communication step [s].
+    fmu_dir : path-like, optional
+        Folder to build into (default: a temporary folder).
+    variants : sequence of (str, dict), optional
+        Runs as ``(label, parameter overrides)``; default one run, ``("defaults", {})``.
+        The transfer function is always that of ``parameters`` (the overrides used by
+        :func:`verify` do not enter the linear model: substep and tyre stiffness).
+    fmu_overrides : dict, optional
+        Parameters given to the FMU in every run but not to the TF (a deliberately different
+        plant, e.g. another ``motor_resistance``, for the tests that the check can fail).
+
+    Returns
+    -------
+    dict
+        Per run: the FMU's ``rim_speed_left`` trace, its largest difference from the TF's step
+        response, the time to 63.2 % of the final value and the final value; the TF's trace,
+        electrical and mechanical time constants.
+    """
+    import control
+
+    from orchestrator.build import build_fmu
+    from orchestrator.fmu import FmuInstance
+
+    p = parameters or PlantParameters()
+    model = linear_wheel_model(p)
+    steps = int(round(duration / step))
+    times = np.arange(steps + 1) * step
+    tf_rim = voltage * control.step_response(model.transfer_function(), times).outputs
+    with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
+        path = build_fmu("RobotPlant", fmu_dir or scratch)
+        runs = []
+        for label, overrides in (variants or [("defaults", {})]):
+            instance = FmuInstance(path, f"verify_plant_{len(runs)}")
+            names = set(instance.variables)
+            unknown = sorted(set(overrides) - names)
+            if unknown:
+                raise ConfigError(f"FMU step comparison {label!r}: RobotPlant has no "
+                                  f"parameters {unknown}")
+            values = {f.name: getattr(p, f.name) for f in fields(p) if f.name in names}
+            values.update(fmu_overrides or {})
+            values.update(overrides)
+            instance.instantiate(0.0, duration, parameters=values)
+            try:
+                instance.set_values({"voltage_left": voltage, "voltage_right": voltage})
+                ports = ["rim_speed_left", "rim_speed_right", "wheel_speed_left", "speed"]
+                rows = [instance.get_values(ports)]
+                for k in range(steps):
+                    instance.do_step(k * step, step)
+                    rows.append(instance.get_values(ports))
+            except Exception as exc:
+                raise SimulationError(f"RobotPlant FMU step test failed: {exc}; "
+                                      f"FMU log: {instance.last_error()}") from exc
+            finally:
+                instance.terminate()
+            fmu_rim = np.array([r["rim_speed_left"] for r in rows])
+            runs.append({
+                "label": label, "overrides": dict(overrides),
+                "fmu_rim_speed_left": fmu_rim.tolist(),
+                "fmu_wheel_speed_left": [r["wheel_speed_left"] for r in rows],
+                "max_abs_difference_m_s": float(np.max(np.abs(fmu_rim - tf_rim))),
+                "max_difference_pct_of_final": float(100 * np.max(np.abs(fmu_rim - tf_rim))
+                                                     / abs(tf_rim[-1])),
+                "left_right_max_difference_m_s": float(np.max(np.abs(
+                    fmu_rim - np.array([r["rim_speed_right"] for r in rows])))),
+                "fmu_t63_s": _time_to_fraction(times, fmu_rim, 1 - math.exp(-1)),
+                "fmu_final_m_s": float(fmu_rim[-1]),
+            })
+    electrical, mechanical = model.time_constants
+    return {
+        "voltage_v": float(voltage), "step_s": float(step), "duration_s": float(duration),
+        "times": times.tolist(), "tf_rim_speed": tf_rim.tolist(),
+        "tf_t63_s": _time_to_fraction(times, tf_rim, 1 - math.exp(-1)),
+        "tf_final_m_s": float(tf_rim[-1]),
+        "tf_steady_state_m_s": float(voltage * model.dc_gain),
+        "electrical_time_constant_s": electrical, "mechanical_time_constant_s": mechanical,
+        "runs": runs,
+    }
+
+
+def _time_to_fraction(times, values, fraction):
+    """First time the trace reaches ``fraction`` of its steady value (linear interpolation).
+
+    The steady value is the analytic one only for the TF, so both traces use their own last
+    sample, which after five time constants is within 1 % of steady.
+    """
+    target = fraction * values[-1]
+    index = int(np.argmax(values >= target))
+    if index == 0:
+        return float(times[0])
+    t0, t1, v0, v1 = times[index - 1], times[index], values[index - 1], values[index]
+    return float(t0 + (target - v0) * (t1 - t0) / (v1 - v0))
+
+
+def fmu_variants(plant):
+    """The FMU runs of the report: defaults, a finer substep, a 100x stiffer tyre.
+
+    The two variants tell integration error from modelling difference: only the former
+    shrinks with the substep, only the tyre's compliance shrinks with its stiffness.
+    """
+    fine = plant.max_substep / 8
+    return [("defaults", {}),
+            (f"max_substep {1000 * fine:g} ms", {"max_substep": fine}),
+            ("slip_stiffness x100", {"slip_stiffness": 100 * plant.slip_stiffness})]
+
+
+
+
+# ----- WheelController FMU against the law ----------------------------------------------------
+def controller_law_reference(settings, inputs, h):
+    """The documented controller law (docs/control.md), recomputed here step by step.
+
+    Independent of :class:`components.control.WheelSpeedController` except for the fuzzy
+    scheduler's normalised gains (the scheduler is checked against scikit-fuzzy in the unit
+    tests): its own backward-Euler derivative, integrator with conditional integration and
+    clamp, feedforward and clipping.
+
+    Parameters
+    ----------
+    settings : dict
+        Controller parameters (:data:`components.control.DEFAULTS` with overrides).
+    inputs : sequence of (v_ref, v_meas)
+    h : float
+        Step [s].
+
+    Returns
+    -------
+    list of (voltage, kp, kd, e_n, de_n)
+    """
+    from components.control.inference import FuzzyGainScheduler
+
+    s = settings
+    g, e_range, de_range, limit = (s["volts_per_speed"], s["e_range"], s["de_range"],
+                                   s["v_supply"])
+    tau = s["derivative_time_constant"]
+    scheduler = FuzzyGainScheduler(e_range, de_range, method=s["fuzzy_method"])
+    ki = s["pid_ki"] if s["mode"] == "pid" else s["trim_ki"]
+    integral_limit = limit / (g * e_range)
+    integral, rate, previous = 0.0, 0.0, None
+    out = []
+    for v_ref, v_meas in inputs:
+        error = v_ref - v_meas
+        rate = 0.0 if previous is None else (tau * rate + error - previous) / (tau + h)
+        previous = error
+        e_n, de_n = error / e_range, rate / de_range
+        if s["mode"] == "fgs_pd":
+            kp_n, kd_n = scheduler.evaluate_normalised(e_n, de_n)
+            kp = s["kp_min"] + (s["kp_max"] - s["kp_min"]) * kp_n
+            kd = s["kd_min"] + (s["kd_max"] - s["kd_min"]) * kd_n
+        elif s["mode"] == "pd":
+            kp, kd = s["pd_kp"], s["pd_kd"]
+        else:
+            kp, kd = s["pid_kp"], s["pid_kd"]
+        offset = g * v_ref if s["feedforward"] else 0.0
+        if ki > 0.0:
+            candidate = min(max(integral + e_n * h, -integral_limit / ki), integral_limit / ki)
+            raw = offset + g * e_range * (kp * e_n + ki * candidate + kd * de_n)
+            if not ((raw > limit and e_n > 0.0) or (raw < -limit and e_n < 0.0)):
+                integral = candidate
+        raw = offset + g * e_range * (kp * e_n + ki * integral + kd * de_n)
+        out.append((min(max(raw, -limit), limit), kp, kd, e_n, de_n))
+    return out
+
+
+def _controller_inputs(settings, samples, seed):
+    """Random (v_ref, v_meas): half the steps small moves (inside the universe), half jumps."""
+    rng = np.random.default_rng(seed)
+    e_range = settings["e_range"]
+    inputs, error = [], 0.0
+    for k in range(samples):
+        v_ref = float(rng.uniform(-0.4, 0.4))
+        if (k // 10) % 2 == 0:
+            error = float(np.clip(error + rng.normal(0.0, 0.01), -0.8 * e_range, 0.8 * e_range))
+        else:
+            error = float(rng.uniform(-2.5 * e_range, 2.5 * e_range))
+        inputs.append((v_ref, v_ref - error))
+    return inputs
+
+
+def controller_fmu_comparison(settings, modes=("fgs_pd", "pd", "pid"), samples=60, seed=14,
+                              h=0.02, fmu_dir=None, fmu_overrides=None):
+    """Step the built WheelController FMU with random inputs; compare with the law.
+
+    Parameters
+    ----------
+    settings : dict
+        Controller parameters given to the FMU and to the reference.
+    modes : sequence of str
+        Each mode is one run.
+    samples, seed : int
+        Steps per run and the seed of the inputs.
+    h : float
+        Communication step [s].
+    fmu_overrides : dict, optional
+        Parameters given to the FMU only (a deliberately different controller, for the tests).
+
+    Returns
+    -------
+    dict
+        Per mode: largest |voltage difference| [V], largest kp/kd difference, and how many
+        samples had ``|e_n| > 1`` or ``|de_n| > 1`` (outside the fuzzy universe).
+    """
+    from orchestrator.build import build_fmu
+    from orchestrator.fmu import FmuInstance
+
+    inputs = _controller_inputs(settings, samples, seed)
+    runs = {}
+    with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
+        path = build_fmu("WheelController", fmu_dir or scratch)
+        for mode in modes:
+            law = dict(settings, mode=mode)
+            reference = controller_law_reference(law, inputs, h)
+            instance = FmuInstance(path, f"verify_controller_{mode}")
+            names = set(instance.variables)
+            values = {k: v for k, v in law.items() if k in names}
+            values.update(fmu_overrides or {})
+            instance.instantiate(0.0, samples * h, parameters=values)
+            rows = []
+            try:
+                for k, (v_ref, v_meas) in enumerate(inputs):
+                    instance.set_values({"v_ref": v_ref, "v_meas": v_meas})
+                    instance.do_step(k * h, h)
+                    rows.append(instance.get_values(["voltage", "kp", "kd"]))
+            except Exception as exc:
+                raise SimulationError(f"WheelController FMU ({mode}) failed: {exc}; FMU log: "
+                                      f"{instance.last_error()}") from exc
+            finally:
+                instance.terminate()
+            volts = np.array([r["voltage"] for r in rows])
+            ref = np.array(reference)
+            runs[mode] = {
+                "max_voltage_difference_v": float(np.max(np.abs(volts - ref[:, 0]))),
+                "max_gain_difference": float(max(
+                    np.max(np.abs(np.array([r["kp"] for r in rows]) - ref[:, 1])),
+                    np.max(np.abs(np.array([r["kd"] for r in rows]) - ref[:, 2])))),
+                "outside_universe": int(np.sum((np.abs(ref[:, 3]) > 1) | (np.abs(ref[:, 4]) > 1))),
+                "saturated": int(np.sum(np.abs(ref[:, 0]) >= settings["v_supply"])),
+                "samples": samples,
+            }
+    return {"seed": seed, "step_s": h, "fmu_overrides": dict(fmu_overrides or {}), "runs": runs}
+
+
+# ----- the closed loop through both FMUs ------------------------------------------------------
+def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=1.5,
+                               encoder_ppr=1_000_000, fmu_dir=None, fmu_overrides=None):
+    """RobotPlant + two WheelControllers (fixed-PD or PID mode) in our master vs the TF.
+
+    The master (Gauss-Seidel, controllers first, base step = the loop's period) runs one step
+    at zero reference, then a reference step of ``step`` on both wheels. The plant's encoder
+    resolution is raised to ``encoder_ppr`` (the linear model has no quantisation); every
+    other parameter is RobotPlant's default, as in the model.
+
+    Parameters
+    ----------
+    model : WheelLoopModel
+        Gives the period and the closed-loop TF; must have ``extra_delay = 0``.
+    settings : dict
+        Controller parameters.
+    gain_points : sequence of (mode, kp, kd, ki)
+        ``mode`` "pd" (``ki`` is the trim) or "pid".
+    fmu_overrides : dict, optional
+        Controller parameters given to the FMUs only (tests).
+
+    Returns
+    -------
+    dict
+        Per gain point: largest |rim - step * TF| over both wheels [m/s] and as a fraction
+        of the step, the traces (times, TF, left rim).
+    """
+    import control
+
+    from orchestrator.build import build_fmu
+    from orchestrator.fmu import FmuInstance
+    from orchestrator.master import InstanceSpec, Link, Master
+
+    T = model.period
+    steps = int(round(duration / T))
+    plant = model.plant
+    plant_values = {f.name: getattr(plant, f.name) for f in fields(plant)}
+    plant_values["encoder_ppr"] = int(encoder_ppr)
+    results = []
+    with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
+        folder = fmu_dir or scratch
+        plant_path = build_fmu("RobotPlant", folder)
+        controller_path = build_fmu("WheelController", folder)
+        for index, (mode, kp, kd, ki) in enumerate(gain_points):
+            law = dict(settings, mode=mode, pd_kp=kp, pd_kd=kd, trim_ki=ki, pid_kp=kp,
+                       pid_kd=kd, pid_ki=ki)
+            plant_fmu = FmuInstance(plant_path, f"verify_loop_plant_{index}")
+            plant_params = {k: v for k, v in plant_values.items() if k in plant_fmu.variables}
+            controllers = {}
+            for side in ("left", "right"):
+                handle = FmuInstance(controller_path, f"verify_loop_{side}_{index}")
+                values = {k: v for k, v in law.items() if k in handle.variables}
+                values.update(fmu_overrides or {})
+                controllers[side] = InstanceSpec(side, handle, parameters=values)
+            # Gauss-Seidel order: the controllers read the plant's sample at t_k, then the
+            # plant integrates [t_k, t_k + T] with their voltages (the model's delay 0).
+            specs = [controllers["left"], controllers["right"],
+                     InstanceSpec("plant", plant_fmu, parameters=plant_params)]
+            links = [Link(f"{side}.voltage", f"plant.voltage_{side}") for side in
+                     ("left", "right")]
+            links += [Link(f"plant.wheel_speed_{side}", f"{side}.v_meas") for side in
+                      ("left", "right")]
+            master = Master(specs, links, T)
+            master.initialize(0.0, (steps + 1) * T)
+            group = master.output_group("plant", "Real", ["rim_speed_left", "rim_speed_right"])
+            rims = []
+            try:
+                master.step(0)
+                for spec in controllers.values():
+                    spec.handle.set_values({"v_ref": step})
+                rims.append(list(master.read_outputs("plant", group)))
+                for k in range(1, steps + 1):
+                    master.step(k)
+                    rims.append(list(master.read_outputs("plant", group)))
+            finally:
+                master.terminate()
+            rims = np.array(rims)
+            times = np.arange(steps + 1) * T
+            tf = step * control.step_response(model.closed_loop_tf(kp, kd, ki, "rim"),
+                                              times).outputs
+            difference = float(np.max(np.abs(rims - tf[:, None])))
+            results.append({"mode": mode, "kp": float(kp), "kd": float(kd), "ki": float(ki),
+                            "max_abs_difference_m_s": difference,
+                            "max_difference_fraction_of_step": difference / step,
+                            "times": times.tolist(), "tf_rim_speed": tf.tolist(),
+                            "fmu_rim_speed_left": rims[:, 0].tolist()})
+    return {"step_m_s": float(step), "period_s": float(T), "encoder_ppr": int(encoder_ppr),
+            "fmu_overrides": dict(fmu_overrides or {}), "points": results}
