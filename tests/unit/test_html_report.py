@@ -1,6 +1,7 @@
 """The shared HTML report writer: escaping, tables with units, embedded figures, a real browser."""
 
 import base64
+import os
 import re
 import struct
 import zlib
@@ -92,6 +93,9 @@ def test_write_is_atomic_and_utf8(tmp_path):
     path = HtmlReport("Gain \u00b5 report").write(tmp_path / "out" / "r.html")
     assert path.read_text(encoding="utf-8").count("Gain \u00b5 report") == 2
     assert [p.name for p in path.parent.iterdir()] == ["r.html"]
+    mask = os.umask(0)
+    os.umask(mask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~mask  # not mkstemp's 0600
 
 
 def _broken_page(tmp_path):
