@@ -61,9 +61,10 @@ body { font-family: system-ui, sans-serif; max-width: 70rem; margin: 2rem auto;
 h1 { border-bottom: 2px solid #444; padding-bottom: .3rem; }
 h2 { border-bottom: 1px solid #bbb; margin-top: 2.2rem; }
 table { border-collapse: collapse; margin: .8rem 0; font-size: .92rem; }
-th, td { border: 1px solid #bbb; padding: .25rem .55rem; text-align: right; }
+th, td { border: 1px solid #bbb; padding: .25rem .55rem; text-align: left;
+         vertical-align: top; }
 th { background: #eee; }
-td:first-child, th:first-child { text-align: left; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
 caption { caption-side: top; text-align: left; font-weight: 600; padding: .3rem 0; }
 figure { margin: 1rem 0; }
 figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
@@ -192,17 +193,19 @@ def embedded_image_sources(page):
 
 
 def _cell(value, column):
+    """``<td>`` of one value: numbers right-aligned, text left (see the module docstring)."""
     if isinstance(value, _Raw):
-        return value
+        return f"<td>{value}</td>"
     if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "\u2014"
+        return "<td class=\"num\">\u2014</td>"
     if isinstance(value, bool):
-        return "yes" if value else "no"
+        return f"<td>{'yes' if value else 'no'}</td>"
     if isinstance(value, float) or (hasattr(value, "dtype") and value.dtype.kind == "f"):
-        return html.escape(format(float(value), column.format or ".4g"))
-    if isinstance(value, int) and column.format:
-        return html.escape(format(value, column.format))
-    return html.escape(str(value))
+        return f"<td class=\"num\">{html.escape(format(float(value), column.format or '.4g'))}</td>"
+    if isinstance(value, int):
+        text = format(value, column.format) if column.format else str(value)
+        return f"<td class=\"num\">{html.escape(text)}</td>"
+    return f"<td>{html.escape(str(value))}</td>"
 
 
 class Section:
@@ -255,8 +258,7 @@ class Section:
             if len(row) != len(columns):
                 raise ConfigError(f"HTML report table {caption or self.heading!r}: row {index} "
                                   f"has {len(row)} cells for {len(columns)} columns")
-            parts.append("<tr>" + "".join(f"<td>{_cell(v, c)}</td>"
-                                          for v, c in zip(row, columns)) + "</tr>")
+            parts.append("<tr>" + "".join(_cell(v, c) for v, c in zip(row, columns)) + "</tr>")
         parts.append("</tbody></table>")
         self.blocks.append("".join(parts))
         return self

@@ -28,7 +28,7 @@ def html_report(report, model, strict=False):
     top = page.section("Sign convention and model")
     top.bullets(f["statement"])
     verdict = page.section("Checks")
-    verdict.paragraph(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warnings of "
+    verdict.paragraph(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warning(s) of "
                       f"{s['checks']} checks; exit status {s['exit_status']}"
                       + (" (strict: warnings count)." if strict else "."),
                       css_class="pass" if s["exit_status"] == 0 else "fail")

@@ -68,7 +68,7 @@ def markdown_report(report, strict=False):
              "[verification.html](verification.html).", ""]
     lines += [f"- {text}" for text in f["statement"]]
     lines += ["", "## Checks", "",
-              f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warnings of "
+              f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warning(s) of "
               f"{s['checks']} checks; exit status {s['exit_status']}"
               + (" (strict: warnings count)." if strict else "."), "",
               "| check | requirement | measured | verdict |", "|---|---|---|---|"]

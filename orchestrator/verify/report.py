@@ -76,7 +76,7 @@ class VerificationReport:
         """One console line per check, then the counts."""
         lines = [f"{c.verdict:7s} {c.name}: {c.measured}" for c in self.checks]
         s = self.summary()
-        lines.append(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warnings "
+        lines.append(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warning(s) "
                      f"of {s['checks']} checks")
         return lines
 

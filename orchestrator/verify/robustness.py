@@ -1,4 +1,4 @@
-"""Robustness to the plant: the loop on wheels whose gain and time constant differ from RobotPlant's.
+"""Robustness: the loop on wheels whose gain and time constant differ from RobotPlant's.
 
 The controller keeps every constant tuned for RobotPlant (its feedforward ``volts_per_speed``
 above all); the wheel it drives has its DC gain (rim speed per volt) multiplied by
@@ -22,7 +22,10 @@ __all__ = ["PlantVariant", "RobustnessPoint", "plant_grid", "robustness_point",
 
 @dataclass(frozen=True)
 class PlantVariant:
-    """A wheel relative to RobotPlant's: ``gain_factor`` x DC gain, ``time_constant_factor`` x tau."""
+    """A wheel relative to RobotPlant's: DC gain and time constant multiplied by the factors.
+
+    (Both factors multiply RobotPlant's values.)
+    """
 
     gain_factor: float
     time_constant_factor: float

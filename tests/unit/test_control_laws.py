@@ -78,7 +78,8 @@ def test_pd_feedforward_steady_state_error_matches_analysis(delta):
 
 @pytest.mark.parametrize("mode", ["pd", "fgs_pd"])
 @pytest.mark.parametrize("delta", [-0.75, -0.5, 0.0, 1.0, 3.0],
-                         ids=["needs-4x-voltage", "needs-2x", "exact", "needs-half", "needs-quarter"])
+                         ids=["needs-4x-voltage", "needs-2x", "exact", "needs-half",
+                              "needs-quarter"])
 def test_integral_trim_removes_the_steady_state_error_for_any_motor_constant(mode, delta):
     # Final value theorem: with the trim's integrator in the loop the error's final value is
     # 0 for every g_true the loop is stable with; the pure PD's would be the formula above.

@@ -54,8 +54,9 @@ def test_text_is_escaped_and_tables_show_units_and_formats(tmp_path):
     assert "a &lt; b &amp; c" in page
     assert "<script>" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
     assert "<th>margin [dB]</th>" in page and "<th>kp</th>" in page
-    assert "<td>12.35</td>" in page and "<td>yes</td>" in page and "<td>no</td>" in page
-    assert page.count("<td>\u2014</td>") == 2
+    assert '<td class="num">12.35</td>' in page and "<td>yes</td>" in page
+    assert "<td>no</td>" in page and '<td class="num">4</td>' in page
+    assert page.count('<td class="num">\u2014</td>') == 2
     assert '<a href="sub/figures.json">data</a>' in page
 
 
