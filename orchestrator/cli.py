@@ -199,8 +199,8 @@ def _register_reproduce(sub):
 # Sub-commands whose parsers live in their own, heavier modules (numpy, python-control):
 # imported only when that command runs (or for --help), so `sonotrack run` never pays for them.
 _EXTRA_COMMANDS = {
-    "verify": (_register_verify, "Routh-Hurwitz and python-control checks of the wheel-speed "
-                                 "loop, plant FMU vs transfer function"),
+    "verify": (_register_verify, "checks of the wheel-speed loop with verdicts (Routh, margins, "
+                                 "robustness, FMUs vs models); exit status = failed checks"),
     "reproduce": (_register_reproduce, "the paper's experiments in simulation beside the "
                                        "paper's numbers"),
 }
