@@ -54,9 +54,18 @@ def instance_parameters(system, scenario):
                             f"valid: {', '.join(parameters)}")
             continue
         per_instance[instance][name] = value
+    where = getattr(scenario, "source", None) or getattr(scenario, "path", "scenario")
     if problems:
-        where = getattr(scenario, "source", None) or getattr(scenario, "path", "scenario")
         raise ConfigError(f"{where}: " + "; ".join(problems))
+    faults = getattr(scenario, "faults", ())
+    if faults:
+        from orchestrator.faults import SCHEDULE_PARAMETER, fault_parameters
+
+        for instance, text in fault_parameters(system, faults, where).items():
+            if f"{instance}.{SCHEDULE_PARAMETER}" in scenario.parameters:
+                raise ConfigError(f"{where}: parameters.{instance}.{SCHEDULE_PARAMETER} and "
+                                  f"[[faults]] both set {instance}'s schedule; keep one")
+            per_instance[instance][SCHEDULE_PARAMETER] = text
     for component in system.components:
         names = {v.name for v in component.model_description.modelVariables
                  if v.causality == "parameter"}
@@ -282,6 +291,10 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
             "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
         summary["stop_distance_m"] = stop_distance
         summary.update(tracking_summary_from_csv(folder.results_csv, stop_distance))
+        from orchestrator.fault_metrics import fault_summary_from_csv
+
+        summary["robustness"] = fault_summary_from_csv(
+            folder.results_csv, getattr(scenario, "faults", ()), stop_distance)
     folder.write_summary(summary)
     written = []
     interrupted = summary["status"] == "interrupted"

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from components.common.errors import ConfigError
+from orchestrator.faults import check_faults, faults_to_dicts
 
 __all__ = [
     "DEFAULT_MAX_STEPS",
@@ -111,6 +112,8 @@ SCHEMA = {
                     help="co-simulation algorithm"),
     "max_steps": Field("integer", default=DEFAULT_MAX_STEPS, minimum=1, maximum=_MAX_STEPS_LIMIT,
                        help="largest stop_time / base_step accepted (a bound on the work)"),
+    "faults": Field("faults", default=(), help="[[faults]] entries: kind, target, start, "
+                                               "end, magnitude (orchestrator/faults.py)"),
 }
 
 _KIND_TEXT = {
@@ -121,6 +124,7 @@ _KIND_TEXT = {
     "steps": "a table of instance = step in s",
     "parameters": "a table of 'instance.parameter' = value",
     "ports": "a list of 'instance.port' strings",
+    "faults": "a list of [[faults]] tables",
 }
 
 
@@ -288,6 +292,8 @@ class Scenario:
         ``"gauss-seidel"`` or ``"jacobi"``.
     max_steps : int
         Largest number of base steps accepted (a bound on the work, not a result input).
+    faults : tuple of (str, Fault)
+        ``(target instance, fault)`` per ``[[faults]]`` entry (:mod:`orchestrator.faults`).
     source : str
         Where the scenario came from (file path or ``"<dict>"``); not part of equality.
     """
@@ -303,6 +309,7 @@ class Scenario:
     outputs: list[str]
     master: str
     max_steps: int = DEFAULT_MAX_STEPS
+    faults: tuple = ()
     source: str = field(default="<dict>", compare=False)
 
     def __hash__(self):
@@ -336,6 +343,8 @@ class Scenario:
             "outputs": list(self.outputs),
             "master": self.master,
             "max_steps": self.max_steps,
+            # only when there are faults, so a scenario without any hashes as it always did
+            **({"faults": faults_to_dicts(self.faults)} if self.faults else {}),
         }
 
     def with_overrides(self, **changes):
@@ -430,6 +439,8 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
             values[name] = check.parameters(name, value)
         elif spec.kind == "ports":
             values[name] = check.ports(name, value)
+        elif spec.kind == "faults":
+            values[name] = check_faults(check, name, value)
 
     base = values.get("base_step")
     if base is not None:
@@ -479,7 +490,7 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
                     steps=dict(values["steps"]), seed=values["seed"],
                     parameters=dict(values["parameters"]), outputs=list(values["outputs"]),
                     master=values["master"], max_steps=values["max_steps"],
-                    source=str(source))
+                    faults=tuple(values["faults"]), source=str(source))
 
 
 @functools.lru_cache(maxsize=32)

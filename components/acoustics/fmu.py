@@ -61,6 +61,7 @@ class AcousticLocalizer(SonotrackSlave):
             setattr(self, name, int(DEFAULTS[name]))
         for name, _ in _STRING_PARAMETERS:
             setattr(self, name, str(DEFAULTS[name]))
+        self.fault_schedule = ""
         self.core = LocalizerCore()
         self._copy_outputs()  # the core's "no fix yet" values
 
@@ -82,7 +83,12 @@ class AcousticLocalizer(SonotrackSlave):
                          "at the latest attempt")
         self.output_integer("fix_status", "latest attempt: 0 ok, 1 not emitting, 2 behind, "
                             "3 too close, 4 beyond max_range, 5 no onset, 6 weak peak, "
-                            "7 lag at +-l/c, 8 inconsistent delays, 9 estimate beyond max_range")
+                            "7 lag at +-l/c, 8 inconsistent delays, 9 estimate beyond max_range, "
+                            "10 dead microphone, 11 clipped microphone, 12 fix lost")
+        self.output_integer("fix_attempts", "fix attempts so far, valid or not; with "
+                            "fix_status, the reason of each")
+        self.output_integer("faults_active", "faults of fault_schedule active at the latest "
+                            "attempt")
         self.output_real("true_distance", "m", "true range at the latest attempt (for plots)")
         self.output_real("true_bearing", "rad", "true bearing at the latest attempt (for plots)")
         for name, unit, text in _REAL_PARAMETERS:
@@ -91,12 +97,15 @@ class AcousticLocalizer(SonotrackSlave):
             self.parameter_integer(name, text)
         for name, text in _STRING_PARAMETERS:
             self.parameter_string(name, text)
+        self.parameter_string("fault_schedule", "faults this FMU applies: a JSON list of "
+                              "{kind, start, end, magnitude, channel} (docs/faults.md); "
+                              "empty: none")
 
     def exit_initialization_mode(self):
         parameters = {name: float(getattr(self, name)) for name, _, _ in _REAL_PARAMETERS}
         parameters.update({name: int(getattr(self, name)) for name, _ in _INTEGER_PARAMETERS})
         parameters.update({name: str(getattr(self, name)) for name, _ in _STRING_PARAMETERS})
-        self.core = LocalizerCore(**parameters)
+        self.core = LocalizerCore(fault_schedule=str(self.fault_schedule), **parameters)
 
     def do_step(self, current_time, step_size):
         if self.inputs_refused() or self.step_refused(step_size):
@@ -123,3 +132,5 @@ class AcousticLocalizer(SonotrackSlave):
         self.peak_quality = core.peak_quality
         self.fix_status = core.fix_status
         self.true_distance, self.true_bearing = core.true_distance, core.true_bearing
+        self.faults_active = core.faults_active
+        self.fix_attempts = core.fix_attempts

@@ -10,7 +10,9 @@ import math
 import numpy as np
 
 from ..common.errors import InputError
+from ..common.faults import parse_schedule
 from .estimators import make_estimator
+from .faults import channel_fault, drops_fix, faulted_records, mirror_in_wall
 from .geometry import _robot_polar_one, _source_in_array_frame_one, microphone_ranges
 from .settings import LocalizerSettings
 from .synthesis import _synthesise_one, synthesise_records
@@ -32,10 +34,14 @@ class FixStatus:
     LAG_AT_BOUND = 7
     INCONSISTENT = 8
     ESTIMATE_OUT_OF_RANGE = 9
+    DEAD_MICROPHONE = 10
+    CLIPPED_MICROPHONE = 11
+    FIX_LOST = 12
     NAMES = ("ok", "not emitting", "source behind the array", "source closer than min_range",
              "source beyond max_range", "no burst onset detected", "weak correlation peak",
              "correlation peak on the +-l/c bound", "delays geometrically inconsistent",
-             "estimated range beyond max_range")
+             "estimated range beyond max_range", "a microphone record is dead",
+             "a microphone record is clipped", "fix lost (dropped before it was taken)")
 
 
 class BurstFixes:
@@ -128,6 +134,20 @@ def _locate_one(settings, estimator, ranges, rng):
         speed_of_sound=settings.speed_of_sound, noise_std=settings.noise_std,
         adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
         n_samples=settings.record_samples, rng=rng)
+    return _locate_records_one(settings, estimator, records)
+
+
+def _locate_records_one(settings, estimator, records):
+    """:func:`locate_records` for the records (3, n) of one burst, as Python scalars.
+
+    A dead or clipped record (:func:`.faults.channel_fault`) gives no delay worth trusting:
+    the burst is refused with :attr:`FixStatus.DEAD_MICROPHONE` or
+    :attr:`FixStatus.CLIPPED_MICROPHONE` before any correlation.
+    """
+    dead, clipped = channel_fault(records, settings.adc_bits)
+    if dead is not None or clipped is not None:
+        status = FixStatus.DEAD_MICROPHONE if dead is not None else FixStatus.CLIPPED_MICROPHONE
+        return BurstFixes(0.0, 0.0, math.nan, math.nan, 0.0, status)
     measurement = _measure_tdoas_one(records, settings)
     distance, bearing, consistent = estimator.locate_one(measurement.tdoa_12,
                                                          measurement.tdoa_23)
@@ -163,8 +183,14 @@ class LocalizerCore:
         See :data:`~.settings.DEFAULTS`.
     """
 
-    def __init__(self, **parameters):
+    # The fault schedule is set from parameters and never changes: not part of the state.
+    STATE_CONSTANTS = ("faults",)
+
+    def __init__(self, fault_schedule="", **parameters):
         self.settings = LocalizerSettings(**parameters)
+        self.faults = parse_schedule(fault_schedule, "AcousticLocalizer")
+        self.faults_active = 0
+        self.fix_attempts = 0
         self.estimator = make_estimator(self.settings.method, self.settings.mic_spacing,
                                         self.settings.speed_of_sound)
         self.rng = np.random.default_rng(self.settings.seed)
@@ -211,10 +237,15 @@ class LocalizerCore:
         if self.last_fix_index >= 0:
             self.missed_instants += index - self.last_fix_index - 1
         self.last_fix_index = index
-        self._attempt(source_x, source_y, bool(emitting), robot_x, robot_y, robot_heading)
+        active = self.faults.active(index * self.settings.fix_period) if self.faults else ()
+        self.faults_active = len(active)
+        self.fix_attempts += 1
+        self._attempt(source_x, source_y, bool(emitting), robot_x, robot_y, robot_heading,
+                      index, active)
         return True
 
-    def _attempt(self, source_x, source_y, emitting, robot_x, robot_y, robot_heading):
+    def _attempt(self, source_x, source_y, emitting, robot_x, robot_y, robot_heading,
+                 index=0, active=()):
         s = self.settings
         forward, left = _source_in_array_frame_one(source_x, source_y, robot_x, robot_y,
                                                    robot_heading, s.array_offset)
@@ -223,7 +254,10 @@ class LocalizerCore:
         range_2 = math.hypot(forward, left)
         # The array cannot tell front from back (a line array's delays are mirror-symmetric),
         # and the robot's body shadows sound from behind: only the front half-plane is heard.
-        if not emitting:
+        lost = any(f.kind == "lost_fixes" and drops_fix(index, f.magnitude) for f in active)
+        if lost:
+            status = FixStatus.FIX_LOST
+        elif not emitting:
             status = FixStatus.NOT_EMITTING
         elif range_2 < s.min_range:
             status = FixStatus.TOO_CLOSE
@@ -234,7 +268,13 @@ class LocalizerCore:
         else:
             ranges = microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading,
                                        s.mic_spacing, s.array_offset)
-            fixes = _locate_one(s, self.estimator, ranges, self.rng)
+            record_faults = [f for f in active if f.kind != "lost_fixes"]
+            if record_faults:
+                fixes = _locate_records_one(s, self.estimator, self._faulted_records(
+                    ranges, record_faults, source_x, source_y, robot_x, robot_y,
+                    robot_heading))
+            else:
+                fixes = _locate_one(s, self.estimator, ranges, self.rng)
             status = fixes.status
             self.peak_quality = fixes.quality
             if status == FixStatus.OK:
@@ -245,3 +285,15 @@ class LocalizerCore:
                 self.measurement_id += 1
         self.fix_status = int(status)
         self.valid = status == FixStatus.OK
+
+    def _faulted_records(self, ranges, faults, source_x, source_y, robot_x, robot_y,
+                         robot_heading):
+        s = self.settings
+        walls = [f for f in faults if f.kind == "reflecting_wall"]
+        image_ranges = None
+        # The image exists only while source and robot are on the same side of the wall.
+        if walls and (source_x - walls[0].magnitude) * (robot_x - walls[0].magnitude) > 0.0:
+            image_x, image_y = mirror_in_wall(source_x, source_y, walls[0].magnitude)
+            image_ranges = microphone_ranges(image_x, image_y, robot_x, robot_y, robot_heading,
+                                             s.mic_spacing, s.array_offset)
+        return faulted_records(s, ranges, image_ranges, faults, self.rng)

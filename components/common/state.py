@@ -50,7 +50,11 @@ def snapshot(value):
     if isinstance(value, dict):
         return {str(k): snapshot(v) for k, v in value.items()}
     if hasattr(value, "__dict__"):
-        return {_OBJECT: {k: snapshot(v) for k, v in vars(value).items() if not callable(v)}}
+        # Attributes a class lists in STATE_CONSTANTS are fixed at construction from
+        # parameters (a fault schedule): the instance restored into already holds them.
+        constants = getattr(type(value), "STATE_CONSTANTS", ())
+        return {_OBJECT: {k: snapshot(v) for k, v in vars(value).items()
+                          if not callable(v) and k not in constants}}
     raise TypeError(f"cannot snapshot a value of type {type(value).__name__}")
 
 

@@ -13,6 +13,12 @@ _REAL_PARAMETERS = (
     ("v_max", "m/s", 0.4, "largest wheel speed (Eq. 43)"),
     ("a_max", "m/s2", 0.4, "largest wheel acceleration (Eq. 44)"),
     ("stop_distance", "m", 0.5, "straight-line distance from the target at which to stop"),
+    ("max_target_speed", "m/s", 0.0, "fix gate: a fix implying a faster target is rejected "
+     "(docs/faults.md); 0 disables"),
+    ("target_jump_margin", "m", 0.3, "fix gate: localization error allowed on top of "
+     "max_target_speed * time since the last accepted fix"),
+    ("fix_timeout", "s", 0.0, "after this long without an accepted fix, drive out the last "
+     "arc at half speed and stop at its end; 0 disables"),
 )
 
 
@@ -51,6 +57,9 @@ class CurvaturePlanner(SonotrackSlave):
         self.target_y = 0.0
         self.wheel_arc_left = 0.0
         self.wheel_arc_right = 0.0
+        self.rejected_fixes = 0
+        self.fix_age = 0.0
+        self.fix_timed_out = False
 
         self.input_real("distance", "m", "distance of the latest fix from the array centre")
         self.input_real("bearing", "rad", "bearing of the latest fix, left (CCW) positive")
@@ -71,6 +80,10 @@ class CurvaturePlanner(SonotrackSlave):
         self.output_real("wheel_arc_left", "m", "left wheel distance of the current plan (Eq. 38)")
         self.output_real("wheel_arc_right", "m",
                          "right wheel distance of the current plan (Eq. 38)")
+        self.output_integer("rejected_fixes", "fixes the plausibility gate rejected so far")
+        self.output_real("fix_age", "s", "time since the last accepted fix (0 before the first)")
+        self.output_boolean("fix_timed_out", "no accepted fix for fix_timeout: driving out "
+                            "the last arc at half speed, or stopped at its end")
         for name, unit, _, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
         self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
@@ -109,4 +122,7 @@ class CurvaturePlanner(SonotrackSlave):
         self.target_x, self.target_y = core.target_x, core.target_y
         self.wheel_arc_left = mode.wheel_arc_left
         self.wheel_arc_right = mode.wheel_arc_right
+        self.rejected_fixes = core.rejected_fixes
+        self.fix_age = current_time - core.last_accepted_time if core.has_target else 0.0
+        self.fix_timed_out = core.timed_out
         return True

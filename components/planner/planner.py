@@ -11,7 +11,15 @@ from .pure_pursuit import PurePursuitMode
 from .rotate_then_go import RotateThenGoMode
 
 __all__ = ["TargetPlanner", "MODES", "IDLE", "MOVING", "STOPPING", "TURNING",
-           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE"]
+           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE", "FIX_REJECTED", "REACQUIRE_AFTER", "HOLD_SPEED_FACTOR"]
+
+# After this many fixes in a row fail the gate, the next one is taken anyway: the target did
+# move (a source that turns up elsewhere) rather than the localizer erring that often in a row.
+REACQUIRE_AFTER = 5
+# Without fixes for fix_timeout, the robot drives out its last arc at this fraction of the
+# speed: the arc ends stop_distance short of the last heard target, so it cannot reach a
+# source that stayed there, and a source that came closer has time to be heard again.
+HOLD_SPEED_FACTOR = 0.5
 
 MODES = {mode.name: mode for mode in (CurvatureMode, RotateThenGoMode, PurePursuitMode)}
 
@@ -23,6 +31,7 @@ FIX_NONE = "none"
 FIX_ACCEPTED = "accepted"
 FIX_INVALID = "invalid"
 FIX_NEGATIVE = "negative"
+FIX_REJECTED = "rejected"
 
 
 class TargetPlanner:
@@ -48,10 +57,24 @@ class TargetPlanner:
         Straight-line distance [m] from the target at which the robot stops.
     mode : str
         ``"curvature"`` (the paper), ``"rotate_then_go"`` or ``"pure_pursuit"``.
+    max_target_speed : float
+        Plausibility gate [m/s], 0 disables it (the paper has none). A new fix whose target
+        lies more than ``max_target_speed * dt + target_jump_margin`` from the last accepted
+        target (``dt`` since that fix) implies a source faster than it can be and is
+        rejected (``rejected_fixes`` counts them); after :data:`REACQUIRE_AFTER` rejections in
+        a row the next fix is accepted.
+    target_jump_margin : float
+        Localization error allowed on top of the target's motion [m].
+    fix_timeout : float
+        Without an accepted fix for this long [s] the robot slows to
+        :data:`HOLD_SPEED_FACTOR` of ``v_cruise`` (at ``a_max``), drives out its last arc and
+        stops at its end; the next accepted fix restores full speed. 0 disables (the paper's
+        robot drives out its last arc at full speed).
     """
 
     def __init__(self, track_width=0.289, v_cruise=0.3, v_max=0.4, a_max=0.4,
-                 stop_distance=0.5, mode="curvature"):
+                 stop_distance=0.5, mode="curvature", max_target_speed=0.0,
+                 target_jump_margin=0.3, fix_timeout=0.0):
         if mode not in MODES:
             raise ParameterError(f"mode = {mode!r}: not one of {sorted(MODES)}")
         for name, value in (("track_width", track_width), ("v_cruise", v_cruise),
@@ -60,6 +83,18 @@ class TargetPlanner:
                 raise ParameterError(f"{name} = {value!r}: must be a finite number > 0")
         if not (math.isfinite(stop_distance) and stop_distance >= 0.0):
             raise ParameterError(f"stop_distance = {stop_distance!r}: must be a finite number >= 0")
+        for name, value in (("max_target_speed", max_target_speed),
+                            ("target_jump_margin", target_jump_margin),
+                            ("fix_timeout", fix_timeout)):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ParameterError(f"{name} = {value!r}: must be a finite number >= 0")
+        self.max_target_speed = float(max_target_speed)
+        self.target_jump_margin = float(target_jump_margin)
+        self.fix_timeout = float(fix_timeout)
+        self.rejected_fixes = 0
+        self.rejected_in_row = 0
+        self.last_accepted_time = 0.0
+        self.timed_out = False
         self.track_width = float(track_width)
         self.v_cruise = float(v_cruise)
         self.v_max = float(v_max)
@@ -149,9 +184,17 @@ class TargetPlanner:
         mode.record_progress(wheel_speed_left * elapsed, wheel_speed_right * elapsed)
         self.fix_outcome = FIX_NONE
         if new_fix:
-            self._observe(measurement_id, valid, distance, bearing)
-
+            self._observe(time, measurement_id, valid, distance, bearing)
+        self.timed_out = (self.fix_timeout > 0.0 and self.has_target
+                          and time - self.last_accepted_time > self.fix_timeout)
         desired_left, desired_right = mode.command(self, step_size)
+        if self.timed_out:
+            # cap the faster wheel, keeping the ratio (the arc's curvature)
+            cap = HOLD_SPEED_FACTOR * self.v_cruise
+            fastest = max(abs(desired_left), abs(desired_right))
+            if fastest > cap:
+                desired_left *= cap / fastest
+                desired_right *= cap / fastest
         previous_left, previous_right = self.v_ref_left, self.v_ref_right
         left, right, fraction = limit_wheel_change(previous_left, previous_right,
                                                    desired_left, desired_right,
@@ -169,14 +212,31 @@ class TargetPlanner:
         self.v_ref_left, self.v_ref_right = left, right
         return left, right
 
-    def _observe(self, measurement_id, valid, distance, bearing):
+    def _observe(self, time, measurement_id, valid, distance, bearing):
         self.last_measurement_id = measurement_id
         if not valid:
             self.fix_outcome = FIX_INVALID
         elif distance < 0.0:
             self.fix_outcome = FIX_NEGATIVE
         else:
+            target_x, target_y = self.odometry.point_at(distance, bearing)
+            if self._implausible(time, target_x, target_y):
+                self.fix_outcome = FIX_REJECTED
+                self.rejected_fixes += 1
+                self.rejected_in_row += 1
+                return
             self.fix_outcome = FIX_ACCEPTED
+            self.rejected_in_row = 0
+            self.last_accepted_time = float(time)
             self.has_target = True
-            self.target_x, self.target_y = self.odometry.point_at(distance, bearing)
+            self.target_x, self.target_y = target_x, target_y
             self.mode.on_fix(self, distance, bearing)
+
+    def _implausible(self, time, target_x, target_y):
+        """The gate: does the fix imply a target faster than ``max_target_speed``?"""
+        if not (self.max_target_speed > 0.0 and self.has_target
+                and self.rejected_in_row < REACQUIRE_AFTER):
+            return False
+        reach = (self.max_target_speed * (time - self.last_accepted_time)
+                 + self.target_jump_margin)
+        return math.hypot(target_x - self.target_x, target_y - self.target_y) > reach

@@ -41,6 +41,8 @@ class WheelEncoder:
         self.phase = 0.0
         self.count_at_sample = 0
         self.speed = 0.0
+        self.lost = 0
+        self.carry = 0.0
 
     def turn(self, angle):
         """Advance the wheel by ``angle`` [rad]; return the whole counts crossed (signed)."""
@@ -51,7 +53,23 @@ class WheelEncoder:
             self.count += crossed
         return crossed
 
-    def sample(self, window):
-        """Take the windowed speed sample at the end of a window of ``window`` seconds."""
-        self.speed = (self.count - self.count_at_sample) * self.distance_per_count / window
+    def sample(self, window, keep=1.0):
+        """Take the windowed speed sample at the end of a window of ``window`` seconds.
+
+        ``keep`` < 1 is a faulty encoder (docs/faults.md): only that fraction of the window's
+        counts reach the counter (whole counts; the fraction carries over), 0 freezes it.
+        """
+        crossed = self.count - self.count_at_sample
         self.count_at_sample = self.count
+        if keep != 1.0:
+            kept = crossed * keep + self.carry
+            counted = math.floor(kept)
+            self.carry = kept - counted
+            self.lost += crossed - counted
+            crossed = counted
+        self.speed = crossed * self.distance_per_count / window
+
+    @property
+    def reported_count(self):
+        """The count the MCU sees: true counts less those a faulty encoder lost."""
+        return self.count - self.lost

@@ -80,6 +80,7 @@ class RobotPlant(SonotrackSlave):
         for name, _, _ in _REAL_PARAMETERS:
             setattr(self, name, float(getattr(defaults, name)))
         self.encoder_ppr = defaults.encoder_ppr
+        self.fault_schedule = ""
         self.core = RobotPlantCore(defaults)
         self._publish()
 
@@ -92,10 +93,15 @@ class RobotPlant(SonotrackSlave):
         for name, unit, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
         self.parameter_integer("encoder_ppr", "encoder counts per wheel revolution")
+        self.parameter_string("fault_schedule", "faults this FMU applies (supply_sag, "
+                              "encoder_skip, encoder_freeze, low_friction): a JSON list "
+                              "(docs/faults.md); empty: none")
+        self.output_integer("faults_active", "faults of fault_schedule active in the last step")
 
     def exit_initialization_mode(self):
         values = {field.name: getattr(self, field.name) for field in fields(PlantParameters)}
-        self.core = RobotPlantCore(PlantParameters(**values))
+        self.core = RobotPlantCore(PlantParameters(**values),
+                                   fault_schedule=str(self.fault_schedule))
         self._publish()
 
     def do_step(self, current_time, step_size):
@@ -117,3 +123,4 @@ class RobotPlant(SonotrackSlave):
             setattr(self, name, getattr(core, name))
         self.encoder_left = core.encoder_left
         self.encoder_right = core.encoder_right
+        self.faults_active = core.faults_active

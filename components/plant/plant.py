@@ -26,7 +26,9 @@ the same held inputs. Pose is advanced with the trapezoidal rule at the mid-step
 import math
 
 from ..common.errors import InputError
+from ..common.faults import parse_schedule
 from .encoder import WheelEncoder
+from .faults import PlantFaults
 from .odometry import EncoderOdometry
 from .parameters import PlantParameters
 from .traction import _LINEAR_SLIP, slip_ratio
@@ -80,8 +82,13 @@ class RobotPlantCore:
     ...     core.step(6.0, 6.0, 0.01)
     """
 
-    def __init__(self, parameters=None):
+    # The fault schedule is set from parameters and never changes: not part of the state.
+    STATE_CONSTANTS = ("faults",)
+
+    def __init__(self, parameters=None, fault_schedule=""):
         p = PlantParameters(**vars(parameters)) if parameters is not None else PlantParameters()
+        self.faults = PlantFaults(parse_schedule(fault_schedule, "RobotPlant"))
+        self.faults_active = 0
         self.parameters = p.validate()
         self.max_substep_ns = max(1, round(p.max_substep * _NS))
         self.window_ns = max(1, round(p.speed_window * _NS))
@@ -89,6 +96,7 @@ class RobotPlantCore:
         self.half_track = 0.5 * p.track_width
         self.wheel_load = 0.5 * p.mass * p.gravity
         self.tyre_peak = p.mu * self.wheel_load
+        self.tyre_peak_left = self.tyre_peak_right = self.tyre_peak
         self.tyre_stiffness = p.slip_stiffness * self.wheel_load
         self.drive_torque_per_amp = p.gear_efficiency * p.gear_ratio * p.torque_constant
         self.drive_friction = p.gear_efficiency * p.gear_ratio ** 2 * p.motor_viscous_friction
@@ -124,13 +132,13 @@ class RobotPlantCore:
 
     @property
     def encoder_left(self):
-        """Left encoder count (int)."""
-        return self.left_encoder.count
+        """Left encoder count the MCU sees (int; a faulty encoder loses some)."""
+        return self.left_encoder.reported_count
 
     @property
     def encoder_right(self):
-        """Right encoder count (int)."""
-        return self.right_encoder.count
+        """Right encoder count the MCU sees (int)."""
+        return self.right_encoder.reported_count
 
     @property
     def wheel_speed_left(self):
@@ -198,9 +206,12 @@ class RobotPlantCore:
                              f"= {self.parameters.speed_window!r} s), more than "
                              f"MAX_SUBSTEPS_PER_STEP = {MAX_SUBSTEPS_PER_STEP}; take a shorter "
                              "step or a longer max_substep / speed_window")
-        supply = self.parameters.v_supply
-        applied_left = min(supply, max(-supply, voltage_left))
-        applied_right = min(supply, max(-supply, voltage_right))
+        supply_left = supply_right = self.parameters.v_supply
+        keep_left = keep_right = 1.0
+        if self.faults:
+            supply_left, supply_right, keep_left, keep_right = self._apply_faults()
+        applied_left = min(supply_left, max(-supply_left, voltage_left))
+        applied_right = min(supply_right, max(-supply_right, voltage_right))
         self.clamped = applied_left != voltage_left or applied_right != voltage_right
         self.voltage_left = applied_left
         self.voltage_right = applied_right
@@ -215,10 +226,23 @@ class RobotPlantCore:
             self.window_elapsed_ns += span
             if self.window_elapsed_ns == self.window_ns:
                 window = self.window_ns / _NS
-                self.left_encoder.sample(window)
-                self.right_encoder.sample(window)
+                self.left_encoder.sample(window, keep_left)
+                self.right_encoder.sample(window, keep_right)
                 self.window_elapsed_ns = 0
         self._update_slip()
+
+    def _apply_faults(self):
+        """Set each tyre's friction peak; return the supplies and encoder fractions, per wheel."""
+        p, faults, time = self.parameters, self.faults, self.time
+        self.faults_active = faults.count_active(time)
+        left_x, left_y = -math.sin(self.heading), math.cos(self.heading)  # unit vector left
+        half = self.half_track
+        self.tyre_peak_left = self.wheel_load * faults.friction(
+            time, "left", self.x + half * left_x, self.y + half * left_y, p.mu)
+        self.tyre_peak_right = self.wheel_load * faults.friction(
+            time, "right", self.x - half * left_x, self.y - half * left_y, p.mu)
+        return (faults.supply(time, "left", p.v_supply), faults.supply(time, "right", p.v_supply),
+                faults.encoder_keep(time, "left"), faults.encoder_keep(time, "right"))
 
     def _update_slip(self):
         p = self.parameters
@@ -265,9 +289,13 @@ class RobotPlantCore:
         friction = self.drive_friction
         floor = prm.slip_speed_floor
         stiffness = self.tyre_stiffness          # c N: force per unit slip at small slip
-        peak = self.tyre_peak                    # mu N
-        stiffness_per_peak = stiffness / peak
-        linear_slip = _LINEAR_SLIP * peak / stiffness   # tanh is linear to round-off below
+        # mu N per wheel: a low-friction patch (a fault) can lower one wheel's
+        peak_left, peak_right = self.tyre_peak_left, self.tyre_peak_right
+        stiffness_per_peak_left = stiffness / peak_left
+        stiffness_per_peak_right = stiffness / peak_right
+        # tanh is linear to round-off below
+        linear_slip_left = _LINEAR_SLIP * peak_left / stiffness
+        linear_slip_right = _LINEAR_SLIP * peak_right / stiffness
         tolerance2 = prm.substep_tolerance * prm.substep_tolerance
         radius2 = radius * radius
         two_mass = 2.0 * mass
@@ -341,14 +369,14 @@ class RobotPlantCore:
                 slip_long = (rim - ground) * inv_scale
                 slip_lat = -v_lat * inv_scale
                 slip = hypot(slip_long, slip_lat)
-                if slip < linear_slip:
+                if slip < linear_slip_left:
                     force_left = stiffness * slip_long
                     lat_left = stiffness * slip_lat
                     stiff_left = stiffness * inv_scale
                     lat_stiff = stiff_left
                 else:
-                    t = tanh(stiffness_per_peak * slip)
-                    secant = peak * t / slip
+                    t = tanh(stiffness_per_peak_left * slip)
+                    secant = peak_left * t / slip
                     tangent = stiffness * (1.0 - t * t)
                     share = slip_long * slip_long / (slip * slip)
                     force_left = secant * slip_long
@@ -369,14 +397,14 @@ class RobotPlantCore:
                 slip_long = (rim - ground) * inv_scale
                 slip_lat = -v_lat * inv_scale
                 slip = hypot(slip_long, slip_lat)
-                if slip < linear_slip:
+                if slip < linear_slip_right:
                     force_right = stiffness * slip_long
                     lat_right = stiffness * slip_lat
                     stiff_right = stiffness * inv_scale
                     lat_stiff += stiff_right
                 else:
-                    t = tanh(stiffness_per_peak * slip)
-                    secant = peak * t / slip
+                    t = tanh(stiffness_per_peak_right * slip)
+                    secant = peak_right * t / slip
                     tangent = stiffness * (1.0 - t * t)
                     share = slip_long * slip_long / (slip * slip)
                     force_right = secant * slip_long
@@ -444,11 +472,11 @@ class RobotPlantCore:
                 slip_long = (rim - ground) * inv_scale
                 slip_lat = -s_lat * inv_scale
                 slip = hypot(slip_long, slip_lat)
-                if slip < linear_slip:
+                if slip < linear_slip_left:
                     force_left = stiffness * slip_long
                     lat_left = stiffness * slip_lat
                 else:
-                    secant = peak * tanh(stiffness_per_peak * slip) / slip
+                    secant = peak_left * tanh(stiffness_per_peak_left * slip) / slip
                     force_left = secant * slip_long
                     lat_left = secant * slip_lat
                 rim = radius * s_w_right
@@ -464,11 +492,11 @@ class RobotPlantCore:
                 slip_long = (rim - ground) * inv_scale
                 slip_lat = -s_lat * inv_scale
                 slip = hypot(slip_long, slip_lat)
-                if slip < linear_slip:
+                if slip < linear_slip_right:
                     force_right = stiffness * slip_long
                     lat_right = stiffness * slip_lat
                 else:
-                    secant = peak * tanh(stiffness_per_peak * slip) / slip
+                    secant = peak_right * tanh(stiffness_per_peak_right * slip) / slip
                     force_right = secant * slip_long
                     lat_right = secant * slip_lat
 

@@ -38,6 +38,7 @@ class SoundSource(SonotrackSlave):
         super().__init__(**kwargs)
         self.path = "straight"
         self.mute_at_end = True
+        self.fault_schedule = ""
         for name, _, default, _ in _REAL_PARAMETERS:
             setattr(self, name, default)
         self.core = MovingSource()
@@ -55,13 +56,16 @@ class SoundSource(SonotrackSlave):
         self.output_real("last_burst_time", "s", "onset of the latest burst (-1 before the first)")
         self.parameter_string("path", "straight, s_curve, static, or a CSV file of waypoints x,y")
         self.parameter_boolean("mute_at_end", "fall silent when the end of the path is reached")
+        self.parameter_string("fault_schedule", "faults this FMU applies (source_silent): a "
+                              "JSON list of {kind, start, end} (docs/faults.md); empty: none")
+        self.output_integer("faults_active", "faults of fault_schedule active now")
         for name, unit, _, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
 
     def exit_initialization_mode(self):
         parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
         self.core = MovingSource(path=str(self.path), mute_at_end=bool(self.mute_at_end),
-                                 **parameters)
+                                 fault_schedule=str(self.fault_schedule), **parameters)
         self._copy_outputs()
 
     def do_step(self, current_time, step_size):
@@ -80,3 +84,4 @@ class SoundSource(SonotrackSlave):
         self.speed = core.speed
         self.burst_count = core.burst_count
         self.last_burst_time = core.last_burst_time
+        self.faults_active = core.faults_active

@@ -3,9 +3,12 @@
 import math
 
 from ..common.errors import ParameterError
+from ..common.faults import parse_schedule
 from ..common.trapezoid import TrapezoidProfile
 from .emission import BurstSchedule
 from .paths import make_path
+
+_EDGE = 1e-6
 
 __all__ = ["MovingSource"]
 
@@ -42,9 +45,13 @@ class MovingSource:
         (the default) keeps the source at its start for ever.
     """
 
+    # The fault schedule is set from parameters and never changes: not part of the state.
+    STATE_CONSTANTS = ("silences",)
+
     def __init__(self, path="straight", v_max=0.2, a_max=0.2, x0=0.0, y0=1.0,
                  heading0=0.5 * math.pi, length=6.0, amplitude=0.5, emit_period=0.01,
-                 mute_at_end=True, start_delay=0.0, x1=0.0, y1=0.0, switch_time=-1.0):
+                 mute_at_end=True, start_delay=0.0, x1=0.0, y1=0.0, switch_time=-1.0,
+                 fault_schedule=""):
         if not (math.isfinite(emit_period) and emit_period > 0.0):
             raise ParameterError(f"emit_period = {emit_period!r}: must be a finite number > 0")
         if not (math.isfinite(start_delay) and start_delay >= 0.0):
@@ -55,6 +62,9 @@ class MovingSource:
         if switch_time >= 0.0 and path != "static":
             raise ParameterError(f"switch_time = {switch_time!r} applies to path 'static' only, "
                                  f"not {path!r}; set switch_time < 0 for other paths")
+        # source_silent faults: no bursts on [start, end), the path goes on.
+        self.silences = parse_schedule(fault_schedule, "SoundSource").faults
+        self.faults_active = 0
         self.second_position = (float(x1), float(y1))
         self.switch_time = float(switch_time)
         self.path = make_path(path, x0, y0, heading0, length, amplitude)
@@ -88,3 +98,22 @@ class MovingSource:
         self.heading = math.atan2(tangent_y, tangent_x)
         self.vx, self.vy = speed * tangent_x, speed * tangent_y
         self.emitting, self.burst_count, self.last_burst_time = self.bursts.state(t)
+        if self.silences:
+            self._silence(t)
+
+    def _silence(self, t):
+        """Take the bursts of the silent stretches up to ``t`` out of the outputs."""
+        bursts = self.bursts
+        self.faults_active = 0
+        for silence in self.silences:
+            if silence.start > t:
+                continue
+            # 1 us before an edge: BurstSchedule's rounding guard counts an onset a few ulps
+            # early, and no two onsets are that close.
+            before = bursts.state(silence.start - _EDGE)
+            last = min(t, silence.end - _EDGE)
+            self.burst_count -= bursts.state(last)[1] - before[1]
+            if silence.active(t):
+                self.faults_active += 1
+                self.emitting = False
+                self.last_burst_time = before[2]

@@ -1,0 +1,64 @@
+"""Every shipped fault scenario, closed loop through the built FMUs: does the robot survive?
+
+Survived means: no NaN or inf in any recorded output; body speed never above the planner's
+v_max by more than 5 %; never closer to the source than stop_distance / 2; after a fault that
+ends, the final distance is within 0.3 m of stop_distance; after a permanent one, the robot
+has stopped. A kind the loop does not survive is an xfail with the measured numbers, not a
+looser assertion.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.results import read_results
+from orchestrator.run import run_scenario
+from orchestrator.scenario import load_scenario
+
+pytestmark = pytest.mark.integration
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios" / "faults"
+V_MAX = 0.4              # the planner's default v_max, which the scenarios keep
+STOP_DISTANCE = 0.5      # the planner's default stop_distance
+STOPPED_SPEED = 0.03     # m/s
+
+# Kinds the loop does not survive today, with the measured numbers (seed 1).
+KNOWN_FAILURES = {
+    "encoder_freeze": "right encoder frozen 2 s: the PD sees 0 m/s, drives the wheel to full "
+                      "voltage; body speed 0.857 m/s > 1.05 v_max (0.42); the controller has "
+                      "no encoder plausibility check",
+    "encoder_skip": "left encoder loses half its counts 5 s: the PD holds the measured speed, "
+                    "so the true left wheel runs at twice its reference; the robot turns "
+                    "right, the source ends behind the array, final distance 3.45 m",
+}
+
+
+def _cases():
+    for path in sorted(SCENARIOS.glob("*.toml")):
+        marks = ([pytest.mark.xfail(reason=KNOWN_FAILURES[path.stem], strict=True)]
+                 if path.stem in KNOWN_FAILURES else [])
+        yield pytest.param(path, id=path.stem, marks=marks)
+
+
+@pytest.mark.parametrize("path", list(_cases()))
+def test_robot_survives_the_fault(path, fmu_dir, tmp_path):
+    scenario = load_scenario(path)
+    result = run_scenario(scenario, tmp_path / "run", progress=False, fmu_dir=fmu_dir,
+                          plots=False)
+    data = read_results(result.results_csv)
+    for name, column in data.items():
+        assert np.all(np.isfinite(column)), f"{name} has NaN or inf"
+    speed = np.abs(data["plant.speed"])
+    distance = np.hypot(data["plant.x"] - data["source.x"], data["plant.y"] - data["source.y"])
+    assert speed.max() <= 1.05 * V_MAX, f"body speed {speed.max():.3f} m/s"
+    assert distance.min() > STOP_DISTANCE / 2, f"closest {distance.min():.3f} m"
+    robustness = result.summary["robustness"]
+    assert robustness["faults"], "the summary lists no fault"
+    permanent = any(fault.permanent for _, fault in scenario.faults)
+    if permanent:
+        assert speed[-1] < STOPPED_SPEED, f"still moving at {speed[-1]:.3f} m/s"
+        assert robustness["stopped_safely"]
+    else:
+        assert abs(distance[-1] - STOP_DISTANCE) <= 0.3, f"final distance {distance[-1]:.3f} m"
+    assert robustness["max_body_speed_m_s"] == pytest.approx(speed.max())
