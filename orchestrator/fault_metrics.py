@@ -22,7 +22,8 @@ import math
 
 import numpy as np
 
-__all__ = ["fault_summary_from_csv", "SLIP_THRESHOLD", "STOPPED_SPEED"]
+__all__ = ["fault_summary_from_csv", "survival", "SLIP_THRESHOLD", "STOPPED_SPEED",
+           "SPEED_MARGIN", "FINAL_TOLERANCE"]
 
 # A tyre that slips more than this is past the peak of a typical rubber-on-floor curve
 # (about 0.1-0.2): traction falls and the wheel speed no longer measures the body's.
@@ -132,3 +133,44 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
         summary["stopped_safely"] = bool(last_speed < STOPPED_SPEED
                                          and min_distance > 0.5 * stop_distance)
     return summary
+
+
+# The survival checks of issue 12 (docs/faults.md), with the planner defaults they fall back on.
+SPEED_MARGIN = 1.05          # body speed at most 5 % above v_max
+FINAL_TOLERANCE = 0.3        # m: final distance within this of stop_distance after a fault ends
+_PLANNER_DEFAULTS = {"v_max": 0.4, "stop_distance": 0.5}
+
+
+def survival(data, scenario):
+    """The survival checks of a fault run, each True or False.
+
+    Parameters
+    ----------
+    data : dict of str to numpy.ndarray
+        The run's columns (``orchestrator.results.read_results``).
+    scenario : Scenario
+        The run's scenario (its faults, and the planner's ``v_max`` and ``stop_distance``).
+
+    Returns
+    -------
+    dict
+        ``finite`` (no NaN or inf in any column), ``speed`` (body speed <= 1.05 v_max),
+        ``no_collision`` (distance > stop_distance / 2), and ``recovered`` (after faults
+        that all end, final distance within 0.3 m of stop_distance) or ``stopped`` (after a
+        permanent fault, final body speed below :data:`STOPPED_SPEED`).
+    """
+    values = {name: float(scenario.parameters.get(f"planner.{name}", default))
+              for name, default in _PLANNER_DEFAULTS.items()}
+    speed = np.abs(data["plant.speed"])
+    distance = np.hypot(data["plant.x"] - data["source.x"], data["plant.y"] - data["source.y"])
+    checks = {
+        "finite": bool(all(np.all(np.isfinite(column)) for column in data.values())),
+        "speed": bool(speed.max() <= SPEED_MARGIN * values["v_max"]),
+        "no_collision": bool(distance.min() > 0.5 * values["stop_distance"]),
+    }
+    if any(fault.permanent for _, fault in scenario.faults):
+        checks["stopped"] = bool(speed[-1] < STOPPED_SPEED)
+    else:
+        checks["recovered"] = bool(abs(distance[-1] - values["stop_distance"])
+                                   <= FINAL_TOLERANCE)
+    return checks

@@ -17,6 +17,8 @@ _REAL_PARAMETERS = (
      "(docs/faults.md); 0 disables"),
     ("target_jump_margin", "m", 0.3, "fix gate: localization error allowed on top of "
      "max_target_speed * time since the last accepted fix"),
+    ("wheel_check_time", "s", 0.0, "stop for 1 s when a wheel told to turn shows no encoder "
+     "count for this long (frozen encoder, stalled wheel); 0 disables"),
     ("fix_timeout", "s", 0.0, "after this long without an accepted fix, drive out the last "
      "arc at half speed and stop at its end; 0 disables"),
 )
@@ -60,6 +62,7 @@ class CurvaturePlanner(SonotrackSlave):
         self.rejected_fixes = 0
         self.fix_age = 0.0
         self.fix_timed_out = False
+        self.wheel_faults = 0
 
         self.input_real("distance", "m", "distance of the latest fix from the array centre")
         self.input_real("bearing", "rad", "bearing of the latest fix, left (CCW) positive")
@@ -84,6 +87,7 @@ class CurvaturePlanner(SonotrackSlave):
         self.output_real("fix_age", "s", "time since the last accepted fix (0 before the first)")
         self.output_boolean("fix_timed_out", "no accepted fix for fix_timeout: driving out "
                             "the last arc at half speed, or stopped at its end")
+        self.output_integer("wheel_faults", "times the wheel check stopped the robot")
         for name, unit, _, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
         self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
@@ -125,4 +129,5 @@ class CurvaturePlanner(SonotrackSlave):
         self.rejected_fixes = core.rejected_fixes
         self.fix_age = current_time - core.last_accepted_time if core.has_target else 0.0
         self.fix_timed_out = core.timed_out
+        self.wheel_faults = core.wheel_faults
         return True

@@ -11,7 +11,8 @@ from .pure_pursuit import PurePursuitMode
 from .rotate_then_go import RotateThenGoMode
 
 __all__ = ["TargetPlanner", "MODES", "IDLE", "MOVING", "STOPPING", "TURNING",
-           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE", "FIX_REJECTED", "REACQUIRE_AFTER", "HOLD_SPEED_FACTOR"]
+           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE", "FIX_REJECTED", "REACQUIRE_AFTER", "HOLD_SPEED_FACTOR", "WHEEL_CHECK_SPEED",
+           "WHEEL_STUCK_SPEED", "WHEEL_RETRY"]
 
 # After this many fixes in a row fail the gate, the next one is taken anyway: the target did
 # move (a source that turns up elsewhere) rather than the localizer erring that often in a row.
@@ -20,6 +21,14 @@ REACQUIRE_AFTER = 5
 # speed: the arc ends stop_distance short of the last heard target, so it cannot reach a
 # source that stayed there, and a source that came closer has time to be heard again.
 HOLD_SPEED_FACTOR = 0.5
+# Wheel check: a wheel whose reference is at least WHEEL_CHECK_SPEED but whose encoder gives
+# no count (measured speed below half a count per 20 ms window) for wheel_check_time is not
+# turning as told or not measured (a frozen encoder, a stalled wheel). The robot then stops
+# at once (references 0, no ramp: the wheel may be running away) for WHEEL_RETRY, then tries
+# again. A healthy wheel at 0.1 m/s gives about 4 counts per window.
+WHEEL_CHECK_SPEED = 0.1
+WHEEL_STUCK_SPEED = 0.013
+WHEEL_RETRY = 1.0
 
 MODES = {mode.name: mode for mode in (CurvatureMode, RotateThenGoMode, PurePursuitMode)}
 
@@ -70,11 +79,15 @@ class TargetPlanner:
         :data:`HOLD_SPEED_FACTOR` of ``v_cruise`` (at ``a_max``), drives out its last arc and
         stops at its end; the next accepted fix restores full speed. 0 disables (the paper's
         robot drives out its last arc at full speed).
+    wheel_check_time : float
+        A wheel told to turn (|reference| >= :data:`WHEEL_CHECK_SPEED`) whose encoder shows no
+        motion for this long [s] stops the robot for :data:`WHEEL_RETRY` (``wheel_faults``
+        counts the trips); 0 disables.
     """
 
     def __init__(self, track_width=0.289, v_cruise=0.3, v_max=0.4, a_max=0.4,
                  stop_distance=0.5, mode="curvature", max_target_speed=0.0,
-                 target_jump_margin=0.3, fix_timeout=0.0):
+                 target_jump_margin=0.3, fix_timeout=0.0, wheel_check_time=0.0):
         if mode not in MODES:
             raise ParameterError(f"mode = {mode!r}: not one of {sorted(MODES)}")
         for name, value in (("track_width", track_width), ("v_cruise", v_cruise),
@@ -85,12 +98,18 @@ class TargetPlanner:
             raise ParameterError(f"stop_distance = {stop_distance!r}: must be a finite number >= 0")
         for name, value in (("max_target_speed", max_target_speed),
                             ("target_jump_margin", target_jump_margin),
-                            ("fix_timeout", fix_timeout)):
+                            ("fix_timeout", fix_timeout),
+                            ("wheel_check_time", wheel_check_time)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ParameterError(f"{name} = {value!r}: must be a finite number >= 0")
         self.max_target_speed = float(max_target_speed)
         self.target_jump_margin = float(target_jump_margin)
         self.fix_timeout = float(fix_timeout)
+        self.wheel_check_time = float(wheel_check_time)
+        self.wheel_faults = 0
+        self.stuck_since_left = None
+        self.stuck_since_right = None
+        self.wheel_stop_until = -math.inf
         self.rejected_fixes = 0
         self.rejected_in_row = 0
         self.last_accepted_time = 0.0
@@ -200,6 +219,9 @@ class TargetPlanner:
                                                    desired_left, desired_right,
                                                    self.a_max * step_size)
         mode.after_limit(fraction)
+        if self.wheel_check_time > 0.0 and self._wheel_stuck(time, wheel_speed_left,
+                                                             wheel_speed_right):
+            left = right = 0.0
         # The state output, classified here rather than in a helper (this runs every step).
         if left == 0.0 and right == 0.0 and previous_left == 0.0 and previous_right == 0.0:
             self.state = IDLE
@@ -240,3 +262,25 @@ class TargetPlanner:
         reach = (self.max_target_speed * (time - self.last_accepted_time)
                  + self.target_jump_margin)
         return math.hypot(target_x - self.target_x, target_y - self.target_y) > reach
+
+    def _wheel_stuck(self, time, wheel_speed_left, wheel_speed_right):
+        """The wheel check (see ``wheel_check_time``); True while the robot must stand."""
+        if time < self.wheel_stop_until:
+            return True
+        tripped = False
+        for side, measured, reference in (("left", wheel_speed_left, self.v_ref_left),
+                                          ("right", wheel_speed_right, self.v_ref_right)):
+            name = f"stuck_since_{side}"
+            if abs(reference) >= WHEEL_CHECK_SPEED and abs(measured) < WHEEL_STUCK_SPEED:
+                since = getattr(self, name)
+                if since is None:
+                    setattr(self, name, float(time))
+                elif time - since >= self.wheel_check_time - 1e-9:
+                    tripped = True
+            else:
+                setattr(self, name, None)
+        if tripped:
+            self.wheel_faults += 1
+            self.wheel_stop_until = time + WHEEL_RETRY
+            self.stuck_since_left = self.stuck_since_right = None
+        return tripped

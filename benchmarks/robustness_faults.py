@@ -1,0 +1,98 @@
+"""Does the loop survive each fault kind? One closed-loop run per ``scenarios/faults/*.toml``.
+
+For each scenario: injected (the target reported the fault active), survived (every check of
+:func:`orchestrator.fault_metrics.survival`), final distance, max slip ratio, invalid fixes,
+fixes the planner's gate rejected. Target: all survived. Writes
+``benchmarks/results/robustness_faults.json``; with ``--plots DIR`` also one PNG per kind
+(``docs/faults/`` holds the committed ones)::
+
+    .venv/bin/python benchmarks/robustness_faults.py --plots docs/faults
+
+:func:`fault_rows` is what ``benchmarks/robustness.py`` reports as its ``faults`` section.
+"""
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks._common import build_fresh, write_result  # noqa: E402
+
+SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios" / "faults"
+
+
+def fault_rows(fmu_dir, plot_dir=None, names=None):
+    """Run every fault scenario; return one row per scenario (a dict of figures)."""
+    from orchestrator.fault_metrics import survival
+    from orchestrator.results import read_results
+    from orchestrator.run import run_scenario
+    from orchestrator.scenario import load_scenario
+
+    rows = []
+    for path in sorted(SCENARIOS.glob("*.toml")):
+        if names and path.stem not in names:
+            continue
+        scenario = load_scenario(path)
+        started = time.perf_counter()
+        with tempfile.TemporaryDirectory(prefix="sonotrack_fault_") as out:
+            result = run_scenario(scenario, Path(out) / "run", progress=False, fmu_dir=fmu_dir,
+                                  plots=False)
+            data = read_results(result.results_csv)
+            checks = survival(data, scenario)
+            if plot_dir is not None:
+                from orchestrator.fault_plots import plot_fault_run
+
+                plot_fault_run(data, scenario, Path(plot_dir) / f"{path.stem}.png")
+        robustness = result.summary["robustness"]
+        rows.append({
+            "scenario": path.stem,
+            "kinds": sorted({fault.kind for _, fault in scenario.faults}),
+            "injected": bool(robustness["faults_active_s"])
+                        and all(v > 0 for v in robustness["faults_active_s"].values()),
+            "faults_active_s": robustness["faults_active_s"],
+            "survived": all(checks.values()),
+            "checks": checks,
+            "final_distance_m": result.summary["final_distance_to_source_m"],
+            "min_distance_m": result.summary["min_distance_to_source_m"],
+            "max_body_speed_m_s": robustness["max_body_speed_m_s"],
+            "max_slip_ratio": robustness["max_slip_ratio"],
+            "slip_time_s": robustness["slip_time_s"],
+            "invalid_fixes": robustness["invalid_fixes"],
+            "fixes_rejected_by_gate": robustness["fixes_rejected_by_gate"],
+            "stopped_safely": robustness.get("stopped_safely"),
+            "wall_time_s": time.perf_counter() - started,
+        })
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plots", help="folder for one PNG per fault scenario")
+    parser.add_argument("names", nargs="*", help="scenario names (default: all)")
+    args = parser.parse_args(argv)
+    from orchestrator.build import FMU_PACKAGES
+
+    paths = build_fresh(list(FMU_PACKAGES))
+    fmu_dir = next(iter(paths.values())).parent
+    rows = fault_rows(fmu_dir, args.plots, args.names)
+    for row in rows:
+        print(f"{row['scenario']:20s} injected {row['injected']!s:5s} survived "
+              f"{row['survived']!s:5s} final {row['final_distance_m']:.3f} m  max slip "
+              f"{row['max_slip_ratio']:.2f}  max speed {row['max_body_speed_m_s']:.3f} m/s  "
+              f"invalid {sum(row['invalid_fixes'].values())}  rejected "
+              f"{row['fixes_rejected_by_gate']}")
+    survived = sum(row["survived"] for row in rows)
+    print(f"survived {survived} of {len(rows)} (target: all)")
+    if not args.names:
+        path = write_result("robustness_faults", {
+            "target": "every fault scenario survived",
+            "survived": survived, "scenarios": len(rows), "met": survived == len(rows),
+            "faults": rows})
+        print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
