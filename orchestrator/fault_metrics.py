@@ -156,8 +156,9 @@ def survival(data, scenario):
     dict
         ``finite`` (no NaN or inf in any column), ``speed`` (body speed <= 1.05 v_max),
         ``no_collision`` (distance > stop_distance / 2), and ``recovered`` (after faults
-        that all end, final distance within 0.3 m of stop_distance) or ``stopped`` (after a
-        permanent fault, final body speed below :data:`STOPPED_SPEED`).
+        that all end, or a floor patch the robot can leave, final distance within 0.3 m of
+        stop_distance) or ``stopped`` (after a permanent fault without a region, final body
+        speed below :data:`STOPPED_SPEED`).
     """
     values = {name: float(scenario.parameters.get(f"planner.{name}", default))
               for name, default in _PLANNER_DEFAULTS.items()}
@@ -168,7 +169,9 @@ def survival(data, scenario):
         "speed": bool(speed.max() <= SPEED_MARGIN * values["v_max"]),
         "no_collision": bool(distance.min() > 0.5 * values["stop_distance"]),
     }
-    if any(fault.permanent for _, fault in scenario.faults):
+    # A floor patch stays where it is, but the robot can drive off it: only a permanent fault
+    # without a region is one the robot cannot leave behind.
+    if any(fault.permanent and not fault.region for _, fault in scenario.faults):
         checks["stopped"] = bool(speed[-1] < STOPPED_SPEED)
     else:
         checks["recovered"] = bool(abs(distance[-1] - values["stop_distance"])

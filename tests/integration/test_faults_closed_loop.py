@@ -3,7 +3,7 @@
 Survived means: no NaN or inf in any recorded output; body speed never above the planner's
 v_max by more than 5 %; never closer to the source than stop_distance / 2; after a fault that
 ends, the final distance is within 0.3 m of stop_distance; after a permanent one, the robot
-has stopped. A kind the loop does not survive is an xfail with the measured numbers, not a
+has stopped (a floor patch counts as ending: the robot can drive off it). A kind the loop does not survive is an xfail with the measured numbers, not a
 looser assertion.
 """
 
@@ -54,7 +54,8 @@ def test_robot_survives_the_fault(path, fmu_dir, tmp_path):
     assert distance.min() > STOP_DISTANCE / 2, f"closest {distance.min():.3f} m"
     robustness = result.summary["robustness"]
     assert robustness["faults"], "the summary lists no fault"
-    permanent = any(fault.permanent for _, fault in scenario.faults)
+    # a floor patch is permanent but the robot drives off it: it must track again
+    permanent = any(fault.permanent and not fault.region for _, fault in scenario.faults)
     if permanent:
         assert speed[-1] < STOPPED_SPEED, f"still moving at {speed[-1]:.3f} m/s"
         assert robustness["stopped_safely"]
