@@ -181,3 +181,19 @@ def test_planner_slows_to_half_cruise_without_fixes():
     assert max(speeds[:45]) == pytest.approx(0.3)
     assert not planner.timed_out or speeds[-1] <= 0.15 + 1e-12
     assert speeds[-1] == pytest.approx(0.15)
+
+
+def test_on_a_low_friction_patch_the_body_accelerates_at_most_mu_g():
+    # Friction bounds the traction force by mu N per wheel: the body cannot gain speed faster
+    # than mu g, whatever the motors do (an independent bound on the integrated dynamics).
+    mu, seconds = 0.02, 0.5
+    patch = Fault("low_friction", 0.0, magnitude=mu, channel="both", region=(-2.0, -1.0, 2.0, 1.0))
+    iced = RobotPlantCore(fault_schedule=encode_schedule([patch]))
+    dry = RobotPlantCore()
+    _drive(iced, 11.0, seconds)
+    _drive(dry, 11.0, seconds)
+    gravity = iced.parameters.gravity
+    assert iced.speed <= mu * gravity * seconds * 1.01
+    assert iced.speed >= 0.5 * mu * gravity * seconds       # it does push at the limit
+    assert iced.slip_left > 0.5                               # the wheels spin
+    assert dry.speed > 3 * mu * gravity * seconds and abs(dry.slip_left) < 0.2
