@@ -70,6 +70,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     wanted += [f"{t}.faults_active" for t in targets]
     columns = [c for c in wanted if c in header]
     have = set(columns)
+    missing = [c for c in wanted if c not in header]
 
     invalid, last_attempts, previous_time = {}, None, None
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
@@ -128,6 +129,8 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
         "slip_time_s": slip_time,
         "max_slip_ratio": max_slip,
         "max_body_speed_m_s": max_speed,
+        # figures that need these columns are left out or empty, never guessed
+        "not_recorded": missing,
     }
     if last_speed is not None and min_distance is not None:
         summary["stopped_safely"] = bool(last_speed < STOPPED_SPEED

@@ -88,7 +88,11 @@ def _rates(system, scenario):
 
 
 # Recorded whatever the scenario lists: the summary's figures are computed from them.
-_SUMMARY_COLUMNS = ("source.x", "source.y", "plant.x", "plant.y", "plant.heading")
+_SUMMARY_COLUMNS = ("source.x", "source.y", "plant.x", "plant.y", "plant.heading",
+                    # the robustness section (orchestrator/fault_metrics.py)
+                    "plant.speed", "plant.slip_left", "plant.slip_right",
+                    "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
+                    "localizer.faults_active", "source.faults_active", "plant.faults_active")
 
 
 def _recorded_columns(system, scenario):
