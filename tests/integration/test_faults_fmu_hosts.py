@@ -40,3 +40,47 @@ def test_bad_schedule_is_refused_at_initialisation_with_its_field(fmu_paths):
                      logger=lambda *args: messages.append(args[-1]))
     text = " ".join(m.decode() if isinstance(m, bytes) else str(m) for m in messages)
     assert "fault_schedule[0].channel" in text and "M1, M2, M3" in text, text
+
+
+def test_libcosim_applies_a_fault_from_the_ssd_like_our_master(fmu_dir, tmp_path):
+    """A fault set as a parameter in the .ssd: libcosim and our Jacobi master agree to 1e-12."""
+    import csv
+    import shutil
+
+    from orchestrator.build import FMU_PACKAGES, REPO_ROOT
+    from orchestrator.crosscheck import run_libcosim_ssd
+    from orchestrator.run import run_scenario
+    from orchestrator.scenario import scenario_from_dict
+    from orchestrator.ssp import ParameterValue, read_ssd, ssd_to_string
+
+    for name in FMU_PACKAGES:
+        shutil.copy2(fmu_dir / f"{name}.fmu", tmp_path)
+    system = read_ssd(REPO_ROOT / "fmus" / "SystemStructure.ssd")
+    system.component("localizer").parameters["fault_schedule"] = ParameterValue(
+        "String", encode_schedule([Fault("mic_dead", 1.0, 3.0, channel="M2")]))
+    ssd = tmp_path / "SystemStructure.ssd"
+    ssd.write_text(ssd_to_string(system))
+
+    stop = 4.0
+    columns = ["plant.x", "plant.y", "localizer.distance", "localizer.bearing",
+               "planner.v_ref_left", "controller_left.voltage"]
+    _, rows = run_libcosim_ssd(ssd, None, stop, columns)
+    theirs = np.array(rows)
+    scenario = scenario_from_dict({
+        "system": str(ssd), "stop_time": stop, "base_step": system.base_step,
+        "steps": {c.name: c.step_size_hint for c in system.components}, "master": "jacobi"})
+    result = run_scenario(scenario, tmp_path / "ours", progress=False, plots=False,
+                          record_interval=system.base_step)
+    with open(result.results_csv) as stream:
+        ours_rows = list(csv.DictReader(stream))[1:]      # libcosim: after each step
+    ours = np.array([[float(r[c]) for c in columns] for r in ours_rows])
+    time = np.array([float(r["time"]) for r in ours_rows])
+    assert theirs.shape == ours.shape
+    slowest = max(c.step_size_hint for c in system.components)
+    common = np.arange(round(slowest / system.base_step) - 1, len(ours), round(slowest / system.base_step))
+    assert float(np.max(np.abs(ours[common] - theirs[common]))) <= 1e-12
+    # the fault did act: no new fix while M2 is dead, fixes before and after
+    distance = ours[:, columns.index("localizer.distance")]
+    during = (time > 1.05) & (time < 3.0)
+    assert np.ptp(distance[during]) == 0.0
+    assert np.ptp(distance[time < 1.0]) > 0.01 and np.ptp(distance[time > 3.05]) > 0.01
