@@ -94,8 +94,8 @@ def fault_parameters(system, faults, source="scenario"):
         model = KINDS[fault.kind].model
         valid = [name for name, m in models.items() if m == model]
         if models.get(target) != model:
-            problems.append(f"{source}: field 'faults[{index}].target': {target!r} is not a "
-                            f"{model} instance ({fault.kind} is applied by a {model}); "
+            problems.append(f"{source}: field 'faults[{index}].target': {target!r} is not an "
+                            f"instance of {model} (which applies {fault.kind}); "
                             f"valid targets: {', '.join(valid) or 'none in this system'}")
             continue
         by_target.setdefault(target, []).append(fault)
