@@ -197,3 +197,29 @@ def test_on_a_low_friction_patch_the_body_accelerates_at_most_mu_g():
     assert iced.speed >= 0.5 * mu * gravity * seconds       # it does push at the limit
     assert iced.slip_left > 0.5                               # the wheels spin
     assert dry.speed > 3 * mu * gravity * seconds and abs(dry.slip_left) < 0.2
+
+
+def test_state_restored_mid_fault_replays_exactly():
+    # The schedule is a constant of the instance (not saved); everything a fault changes is.
+    from components.common.state import restore, snapshot
+
+    schedule = encode_schedule([Fault("impulsive_noise", 0.2, 0.8, 0.8),
+                                Fault("lost_fixes", 0.0, 1.0, 0.5)])
+    first, second = LocalizerCore(fault_schedule=schedule), LocalizerCore(fault_schedule=schedule)
+    for k in range(4):
+        first.step(0.1 * k, 0.1, 0.3, 2.0, True, 0.0, 0.0, math.pi / 2)
+    restore(second, snapshot(first))
+    for k in range(4, 10):
+        for core in (first, second):
+            core.step(0.1 * k, 0.1, 0.3, 2.0, True, 0.0, 0.0, math.pi / 2)
+        assert (first.fix_status, first.distance, first.bearing) == (
+            second.fix_status, second.distance, second.bearing)
+    plant_schedule = encode_schedule([Fault("encoder_skip", 0.1, 1.0, 0.3, "left")])
+    plant_a = RobotPlantCore(fault_schedule=plant_schedule)
+    plant_b = RobotPlantCore(fault_schedule=plant_schedule)
+    _drive(plant_a, 6.0, 0.3)
+    restore(plant_b, snapshot(plant_a))
+    _drive(plant_a, 6.0, 0.3)
+    _drive(plant_b, 6.0, 0.3)
+    assert plant_a.encoder_left == plant_b.encoder_left and plant_a.left_encoder.lost > 0
+    assert plant_a.left_encoder.carry == plant_b.left_encoder.carry
