@@ -70,7 +70,7 @@ def _cmd_run(args):
         result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
                               plots=not args.no_plots,
                               fmu_dir=args.fmu_dir, record_interval=args.record_interval,
-                              fsync=args.fsync)
+                              fsync=args.fsync, allow_outside=args.allow_outside)
     except SonotrackError as exc:
         if "not found at" in str(exc):
             raise SonotrackError(f"{exc}\n  (build the FMUs first: `sonotrack build`, or "
@@ -158,6 +158,8 @@ def _parser(command=None):
                      help="fsync results.csv once a simulated second (default: at the end)")
     run.add_argument("--no-plots", action="store_true",
                      help="write no PNG plots (results.csv and summary.json only)")
+    run.add_argument("--allow-outside", action="store_true",
+                     help="let the scenario and .ssd read files outside their own folders")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 

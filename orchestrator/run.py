@@ -38,7 +38,8 @@ def instance_parameters(system, scenario):
     per_instance = {c.name: {} for c in system.components}
     for key, value in system.parameter_values.items():
         instance, name = key.split(".", 1)
-        per_instance[instance][name] = value.value if hasattr(value, "value") else value
+        # a waypoint CSV bound in the .ssd or an .ssv resolves from that file's folder
+        per_instance[instance][name] = value.run_value() if hasattr(value, "run_value") else value
     problems = []
     for key, value in scenario.parameters.items():
         instance, dot, name = key.partition(".")
@@ -119,7 +120,7 @@ BACKENDS = ("fmi", "in-process")
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
                  algorithm=None, record_interval=0.02, backend="fmi", fsync=False,
-                 system=None, handles=None, sync_summary=True):
+                 system=None, handles=None, sync_summary=True, allow_outside=False):
     """Run one scenario through our master on fmpy.
 
     The results folder is checked before anything runs; an older run's files in it are
@@ -163,6 +164,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         sweep's worker passes False (four fsyncs, most of a warm run's overhead):
         ``results.csv`` is still fsync'ed before the summary can say ok, and a sweep runs
         again any run whose summary is missing or unreadable.
+    allow_outside : bool
+        Let the scenario and system files name files outside their own folders (waypoint
+        CSVs, ``.ssv`` parameter files; see :mod:`orchestrator.paths`).
 
     Returns
     -------
@@ -186,9 +190,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     from orchestrator.system import load_system
 
     if not hasattr(scenario, "stop_time"):
-        scenario = load_scenario(scenario)
+        scenario = load_scenario(scenario, allow_outside=allow_outside)
     if system is None:
-        system = load_system(scenario.system, fmu_dir=fmu_dir)
+        system = load_system(scenario.system, fmu_dir=fmu_dir, allow_outside=allow_outside)
     parameters = instance_parameters(system, scenario)
     rates = _rates(system, scenario)
     columns = _recorded_columns(system, scenario)

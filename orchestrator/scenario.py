@@ -384,7 +384,7 @@ class Scenario:
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def scenario_from_dict(data, source="<dict>", base_dir=None):
+def scenario_from_dict(data, source="<dict>", base_dir=None, allow_outside=False):
     """Validate a scenario given as a dict (as TOML would give it).
 
     Parameters
@@ -396,6 +396,10 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
     base_dir : str or pathlib.Path, optional
         Directory that a relative ``system`` is resolved from, and whose ``../fmus`` holds the
         default system; without it, the current directory and the repository's ``fmus/``.
+        File-valued parameters (``source.path = "waypoints.csv"``) resolve from it too and
+        must stay inside it (:mod:`orchestrator.paths`).
+    allow_outside : bool
+        Accept file-valued parameters that lead outside ``base_dir``.
 
     Returns
     -------
@@ -459,6 +463,10 @@ def scenario_from_dict(data, source="<dict>", base_dir=None):
             elif not ok:
                 check.add("stop_time", f"{values['stop_time']!r} is not an integer multiple of "
                                        f"base_step {base!r} (ratio {ratio:.6g})")
+
+    if base_dir is not None and values.get("parameters"):
+        values["parameters"] = _resolve_file_parameters(check, values["parameters"], base_dir,
+                                                        allow_outside)
 
     system = values.get("system")
     if system is None and "system" not in data:
@@ -606,14 +614,32 @@ def parse_seconds(text, field_name, maximum=3600.0):
     return value
 
 
-def load_scenario(path):
+def _resolve_file_parameters(check, parameters, base_dir, allow_outside):
+    """File-valued parameters as absolute paths, resolved from the scenario's folder."""
+    from orchestrator.paths import confine, names_a_file
+
+    resolved = dict(parameters)
+    for key, value in parameters.items():
+        if names_a_file(value):
+            path, problem = confine(value, base_dir, allow_outside)
+            if problem is not None:
+                check.add(f"parameters.{key}", problem)
+            else:
+                resolved[key] = str(path)
+    return resolved
+
+
+def load_scenario(path, allow_outside=False):
     """Read and validate a TOML scenario file.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The ``.toml`` file. A relative ``system`` resolves from its directory; without one, the
-        system is ``<its directory>/../fmus/SystemStructure.ssd``.
+        system is ``<its directory>/../fmus/SystemStructure.ssd``. File-valued parameters
+        resolve from its directory and must stay inside it.
+    allow_outside : bool
+        Accept file-valued parameters outside the scenario's directory (``--allow-outside``).
 
     Returns
     -------
@@ -654,4 +680,5 @@ def load_scenario(path):
     except RecursionError:
         raise ConfigError(f"{path}: not a scenario: tables or arrays nested too deeply "
                           "for TOML parsing") from None
-    return scenario_from_dict(data, source=str(path), base_dir=path.resolve().parent)
+    return scenario_from_dict(data, source=str(path), base_dir=path.resolve().parent,
+                              allow_outside=allow_outside)

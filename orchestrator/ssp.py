@@ -90,11 +90,23 @@ class ParameterValue:
     type : str
         One of :data:`PARAMETER_TYPES` (``"Real"``, ``"Integer"``, ``"Boolean"``, ``"String"``).
     value : float or int or bool or str
-        The value, already converted to the Python type that matches ``type``.
+        The value, already converted to the Python type that matches ``type``, as written.
+    origin : pathlib.Path or None
+        Folder of the file that bound it (the ``.ssd`` or ``.ssv``): a file-valued string
+        (a waypoint CSV) is relative to it, see :meth:`run_value`.
     """
 
     type: str
     value: float | int | bool | str
+    origin: Path | None = field(default=None, compare=False)
+
+    def run_value(self):
+        """The value a run passes to the FMU: a relative file path resolved from ``origin``."""
+        from orchestrator.paths import names_a_file
+
+        if self.origin is not None and self.type == "String" and names_a_file(self.value):
+            return str((Path(self.origin) / self.value).resolve())
+        return self.value
 
 
 @dataclass(frozen=True)
@@ -322,7 +334,9 @@ def _convert(type_name, text):
     return text
 
 
-def _read_parameter_set(parameter_set, problems):
+def _read_parameter_set(parameter_set, problems, directory=None, allow_outside=False):
+    from orchestrator.paths import confine, names_a_file
+
     parameters = {}
     values = _child(parameter_set, _ssv("Parameters"))
     if values is None:
@@ -339,8 +353,13 @@ def _read_parameter_set(parameter_set, problems):
         text = _required(typed[0], "value", problems)
         if name is None or text is None:
             continue
+        if directory is not None and type_name == "String" and names_a_file(text):
+            problem = confine(text, directory, allow_outside)[1]
+            if problem is not None:
+                problems.add(typed[0], f"{_describe(parameter)}: {problem}")
+                continue
         try:
-            parameters[name] = ParameterValue(type_name, _convert(type_name, text))
+            parameters[name] = ParameterValue(type_name, _convert(type_name, text), directory)
         except ValueError as error:
             reason = f" ({error})" if isinstance(error, _OutOfRange) else ""
             problems.add(typed[0], f"{_describe(parameter)}: value {text!r} is not a valid "
@@ -348,12 +367,17 @@ def _read_parameter_set(parameter_set, problems):
     return parameters
 
 
-def _read_parameter_bindings(component, bindings, directory, problems):
+def _read_parameter_bindings(component, bindings, directory, problems, allow_outside=False):
+    from orchestrator.paths import confine
+
     parameters = {}
     for binding in _children(bindings, _ssd("ParameterBinding")):
         source = binding.get("source")
         if source is not None:
-            ssv_path = directory / source
+            ssv_path, outside = confine(source, directory, allow_outside, must_exist=False)
+            if outside is not None:
+                problems.add(binding, f"component '{component}': parameter file {outside}")
+                continue
             try:
                 ssv_root = etree.parse(str(ssv_path)).getroot()
             except (OSError, etree.XMLSyntaxError) as error:
@@ -365,7 +389,8 @@ def _read_parameter_bindings(component, bindings, directory, problems):
                                       f"ssv:ParameterSet")
                 continue
             sub_problems = _Problems(ssv_path)
-            parameters.update(_read_parameter_set(ssv_root, sub_problems))
+            parameters.update(_read_parameter_set(ssv_root, sub_problems, ssv_path.parent,
+                                                  allow_outside))
             problems.lines.extend(sub_problems.lines)
             continue
         values = _child(binding, _ssd("ParameterValues"))
@@ -374,7 +399,8 @@ def _read_parameter_bindings(component, bindings, directory, problems):
             problems.add(binding, f"component '{component}': <ssd:ParameterBinding> has neither "
                                   f"a 'source' nor inline <ssd:ParameterValues><ssv:ParameterSet>")
             continue
-        parameters.update(_read_parameter_set(parameter_set, problems))
+        parameters.update(_read_parameter_set(parameter_set, problems, directory,
+                                              allow_outside))
     return parameters
 
 
@@ -424,7 +450,7 @@ def _read_base_step(annotations, problems):
     return None
 
 
-def _read_component(node, directory, problems):
+def _read_component(node, directory, problems, allow_outside=False):
     name = _required(node, "name", problems)
     source = _required(node, "source", problems)
     kind = node.get("type", _FMU_TYPE)
@@ -445,7 +471,8 @@ def _read_component(node, directory, problems):
     parameters = {}
     bindings = _child(node, _ssd("ParameterBindings"))
     if bindings is not None:
-        parameters = _read_parameter_bindings(name, bindings, directory, problems)
+        parameters = _read_parameter_bindings(name, bindings, directory, problems,
+                                              allow_outside)
     annotations = _child(node, _ssd("Annotations"))
     hint = _read_step_size_hint(annotations, problems) if annotations is not None else None
     if name is None or source is None:
@@ -469,13 +496,17 @@ def _read_units(units_node, problems):
     return units
 
 
-def read_ssd(path):
+def read_ssd(path, allow_outside=False):
     """Read an SSP 1.0 ``.ssd`` file.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The ``SystemStructure.ssd`` file.
+    allow_outside : bool
+        Accept ``.ssv`` files and waypoint CSVs outside the folder of the file that names them
+        (``.ssv`` files resolve from the ``.ssd``'s folder, CSVs from their own file's folder;
+        see :mod:`orchestrator.paths`).
 
     Returns
     -------
@@ -527,7 +558,7 @@ def read_ssd(path):
             problems.add(element, f"{_describe(element)}: only <ssd:Component> elements are "
                                   f"supported (no nested systems or signal dictionaries)")
             continue
-        component = _read_component(element, path.parent, problems)
+        component = _read_component(element, path.parent, problems, allow_outside)
         if component is None:
             continue
         if any(c.name == component.name for c in components):

@@ -637,7 +637,7 @@ def check_system(description, model_descriptions, allow_unconnected=()):
     return _check(description, model_descriptions, allow_unconnected, {})
 
 
-def load_system(ssd_path, fmu_dir=None, allow_unconnected=()):
+def load_system(ssd_path, fmu_dir=None, allow_unconnected=(), allow_outside=False):
     """Read an ``.ssd`` and its FMUs' model descriptions, check them and resolve the system.
 
     Parameters
@@ -649,6 +649,9 @@ def load_system(ssd_path, fmu_dir=None, allow_unconnected=()):
         (as libcosim does).
     allow_unconnected : iterable of str
         ``"instance.port"`` inputs that may stay unconnected.
+    allow_outside : bool
+        Accept parameter files and waypoint CSVs outside their file's folder (see
+        :func:`orchestrator.ssp.read_ssd`).
 
     Returns
     -------
@@ -666,7 +669,7 @@ def load_system(ssd_path, fmu_dir=None, allow_unconnected=()):
     """
     from fmpy import read_model_description
 
-    description = read_ssd(ssd_path)
+    description = read_ssd(ssd_path, allow_outside=allow_outside)
     base = Path(fmu_dir) if fmu_dir is not None else description.directory
     model_descriptions, unavailable, fmu_paths, cache = {}, {}, {}, {}
     for component in description.components:

@@ -5,6 +5,22 @@ import pytest
 from orchestrator.build import FMU_PACKAGES, REPO_ROOT, build_all
 
 
+@pytest.fixture(scope="session", autouse=True)
+def fmu_cache(tmp_path_factory):
+    """Unpack FMUs into a cache of this test session, not the user's ~/.cache/sonotrack
+    (child processes inherit the variable)."""
+    import os
+
+    folder = tmp_path_factory.mktemp("fmu-cache")
+    previous = os.environ.get("SONOTRACK_CACHE_DIR")
+    os.environ["SONOTRACK_CACHE_DIR"] = str(folder)
+    yield folder
+    if previous is None:
+        os.environ.pop("SONOTRACK_CACHE_DIR", None)
+    else:
+        os.environ["SONOTRACK_CACHE_DIR"] = previous
+
+
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
     """Folder holding every FMU of the project, freshly built from this checkout."""
