@@ -482,7 +482,7 @@ def scenario_from_dict(data, source="<dict>", base_dir=None, allow_outside=False
         what = "is a directory" if system_path.is_dir() else "does not exist"
         check.add("system", f"{str(system_path)!r} {what} (a path to an .ssd file)")
     elif system_path is not None:
-        _check_against_system(check, values, system_path)
+        _check_against_system(check, values, system_path, allow_outside)
 
     if len(check.problems) == 1:  # one problem, one line
         raise ConfigError(check.problems[0])
@@ -518,17 +518,17 @@ def model_ranges(model_name):
 
 
 @functools.lru_cache(maxsize=32)
-def _read_system(path, _mtime_ns, _size):
+def _read_system(path, _mtime_ns, _size, allow_outside=False):
     from orchestrator.ssp import read_ssd
 
-    return read_ssd(path)
+    return read_ssd(path, allow_outside=allow_outside)
 
 
-def _check_against_system(check, values, system_path):
+def _check_against_system(check, values, system_path, allow_outside=False):
     """Check instances, steps and parameter values against the .ssd and the FMUs' ranges."""
     try:
         stat = system_path.stat()
-        description = _read_system(system_path, stat.st_mtime_ns, stat.st_size)
+        description = _read_system(system_path, stat.st_mtime_ns, stat.st_size, allow_outside)
     except ConfigError as error:
         check.problems.append(str(error))
         return

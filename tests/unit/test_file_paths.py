@@ -111,3 +111,16 @@ def test_csv_in_an_ssv_leading_outside_is_refused(tmp_path):
     ssd = _ssd_with_binding(system, '<ssd:ParameterBinding source="v.ssv"/>')
     with pytest.raises(ConfigError, match=r"'\.\./\.\./w\.csv' leads outside"):
         read_ssd(ssd)
+
+
+def test_scenario_check_of_its_system_honours_allow_outside(tmp_path):
+    """The scenario loader reads the .ssd too: an .ssv outside it needs the same option."""
+    system = tmp_path / "system"
+    system.mkdir()
+    _ssv(tmp_path / "values.ssv", "s_curve")
+    ssd = _ssd_with_binding(system, '<ssd:ParameterBinding source="../values.ssv"/>')
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(f'stop_time = 1.0\nsystem = "{ssd}"\n')
+    with pytest.raises(ConfigError, match="--allow-outside"):
+        load_scenario(scenario)
+    assert load_scenario(scenario, allow_outside=True).system == ssd.resolve()
