@@ -15,6 +15,7 @@ from .loop_model import zoh_with_average
 
 __all__ = ["GainAnalysis", "analyse_gains", "stability_boundary", "continuous_gain_bound",
            "controller_cross_check", "kp_edge", "routh_bounds", "spectral_radii",
+           "incremental_form",
            "KP_SEARCH_MAX"]
 
 # Beyond this kp the search for the stability edge stops. With the defaults the edge is near
@@ -316,3 +317,27 @@ def routh_bounds(model, kp_probe, kd_probe, ki=0.0, limit=1.0e4):
         *model.characteristic_in_kd(kp, ki), is_schur)} for kp in kp_probe]
     return {"limit": float(limit), "ki": float(ki), "continuous_kp": continuous,
             "sampled_kp": sampled, "sampled_kd": sampled_kd}
+
+
+def incremental_form(model, kp, kd):
+    """The PD law read as a voltage *change* per sample (incremental / velocity form).
+
+    ``V_k = V_k-1 + g e_range (kp e_n + kd de_n)``: the controller is the PD's ``C(z)`` times
+    ``z / (z - 1)``, so the paper's kp becomes an integral gain per sample. Used in
+    docs/control.md to weigh this form against the integral trim.
+
+    Returns
+    -------
+    dict
+        ``spectral_radius``, and the dominant pole's ``frequency_hz`` and ``damping_ratio``
+        (of the equivalent continuous pole ``ln(z) / T``).
+    """
+    nc, dc = model.controller_poly(kp, kd)
+    characteristic = np.polyadd(np.polymul(np.polymul(dc, [1.0, -1.0]), model.meas_den),
+                                np.polymul(np.polymul(nc, [1.0, 0.0]), model.meas_num))
+    roots = np.roots(characteristic)
+    dominant = roots[np.argmax(np.abs(roots))]
+    s = np.log(complex(dominant)) / model.period
+    return {"kp": float(kp), "kd": float(kd), "spectral_radius": float(abs(dominant)),
+            "frequency_hz": float(abs(s.imag) / (2 * math.pi)),
+            "damping_ratio": float(-s.real / abs(s)) if abs(s) > 0 else 1.0}

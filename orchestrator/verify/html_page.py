@@ -70,5 +70,14 @@ def html_report(report, model, strict=False):
                   Column("settling", "s", ".2f")], rows,
                  caption="Final value theorem on the sampled closed loop; "
                          "\u2014 = unstable")
+    forms = page.section("The PD form")
+    forms.paragraph("The controller runs the PD of Eq. (46) with an integral trim "
+                    "(docs/control.md). Read as a voltage change per sample (the incremental "
+                    "form), the same law makes kp an integral gain per sample:")
+    forms.table([Column("kp", "1", "g"), Column("kd", "1", "g"), Column("max|z|", "1", ".4f"),
+                 Column("dominant pole", "Hz", ".2f"), Column("damping ratio", "1", ".3f")],
+                [[x["kp"], x["kd"], x["spectral_radius"], x["frequency_hz"], x["damping_ratio"]]
+                 for x in f["pd_forms"]["incremental"]],
+                caption="Incremental form on the sampled loop")
     page.section("Not in this model").bullets(LIMITS)
     return page

@@ -117,6 +117,15 @@ def markdown_report(report, strict=False):
                                                       f["robustness_pure_pd"])]:
         lines += [f"**{name}**", "", _robustness_table(points, r["gain_factors"],
                                                        r["time_constant_factors"]), ""]
-    lines += ["## Not in this model (honest limits)", ""] + [f"- {x}" for x in LIMITS]
+    lines += ["## The PD form", "",
+              "The controller runs the PD of Eq. (46) with an integral trim (docs/control.md). "
+              "The incremental form, the same law read as a voltage change per sample, would "
+              "make kp an integral gain per sample; on this loop it gives:", "",
+              "| kp | kd | largest abs(z) | dominant pole [Hz] | damping ratio |",
+              "|---|---|---|---|---|"]
+    lines += [f"| {x['kp']:g} | {x['kd']:g} | {x['spectral_radius']:.4f} | "
+              f"{x['frequency_hz']:.2f} | {x['damping_ratio']:.3f} |"
+              for x in f["pd_forms"]["incremental"]]
+    lines += ["", "## Not in this model (honest limits)", ""] + [f"- {x}" for x in LIMITS]
     lines += ["", f"Wall time: {f.get('wall_time_s', math.nan):.1f} s."]
     return "\n".join(lines) + "\n"

@@ -14,12 +14,12 @@ import numpy as np
 from components.control.fgs_pd import PAPER_TO_OURS, scheduled_gain
 from components.control.inference import FuzzyGainScheduler
 
-from .analysis import analyse_gains, controller_cross_check, kp_edge, routh_bounds, \
-    stability_boundary
+from .analysis import analyse_gains, controller_cross_check, incremental_form, kp_edge, \
+    routh_bounds, stability_boundary
 from .robustness import plant_grid, robustness_point
 
 __all__ = ["gain_surface", "reachable_gains", "surface_distances", "paper_box",
-           "pid_baseline", "robustness", "routh_finding", "core_cross_check",
+           "pid_baseline", "robustness", "routh_finding", "core_cross_check", "pd_forms",
            "PAPER_BOX_SIGNED"]
 
 # The paper's printed ranges on its own error convention (y - r): Sec. 4.1.
@@ -166,3 +166,10 @@ def core_cross_check(model, settings):
             "pid": controller_cross_check(model, settings["pid_kp"], settings["pid_kd"],
                                           settings["pid_ki"], mode="pid"),
             "step_m_s": 0.05}
+
+
+def pd_forms(model, settings):
+    """The surface's corners and middle in the incremental form (docs/control.md's comparison)."""
+    kps = (settings["kp_min"], 0.5 * (settings["kp_min"] + settings["kp_max"]), settings["kp_max"])
+    kds = (settings["kd_min"], 0.5 * (settings["kd_min"] + settings["kd_max"]), settings["kd_max"])
+    return {"incremental": [incremental_form(model, kp, kd) for kp in kps for kd in kds]}

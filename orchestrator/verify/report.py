@@ -242,6 +242,7 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
         model, pure, robust["gain_factors"], robust["time_constant_factors"],
         controllers=("fgs_pd",))["points"]["fgs_pd"]
     f["routh_finding"] = measure.routh_finding(model, settings)
+    f["pd_forms"] = measure.pd_forms(model, settings)
     if extra_delay == 0:
         jacobi = replace(model, extra_delay=1)
         f["jacobi_boundaries"] = [stability_boundary(jacobi, kd, settings["trim_ki"])

@@ -55,6 +55,7 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     assert verdicts["closed_loop_fmus_vs_tf"]
     markdown = (out / "verification.md").read_text()
     assert "## Checks" in markdown and "Sign convention" in markdown
+    assert "## The PD form" in markdown and "|z|" not in markdown.split("## The PD form")[1]
     assert "![" in markdown and "](stability_region.png)" in markdown
     assert str(out) not in markdown
 

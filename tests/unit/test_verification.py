@@ -119,3 +119,28 @@ def test_register_cli_adds_verify_with_default_out_dir():
     assert args.out == "runs/verify" and args.grid == 11 and callable(args.func)
     assert not args.strict and parser.parse_args(["verify", "--strict"]).strict
     assert parser.parse_args(["verify", "--out", "x"]).out == "x"
+
+
+@pytest.mark.parametrize("kp,kd", [(4.0, 0.3), (3.5, 1.15)], ids=["corner", "middle"])
+def test_incremental_form_poles_match_a_simulation_of_the_incremental_law(model, kp, kd):
+    # V_k = V_k-1 + g e_range (kp e_n + kd de_n), run on the sampled plant with the
+    # window-averaged measurement: the error's envelope grows or decays as |z|^k.
+    from components.control import FilteredDerivative
+    from orchestrator.verify.analysis import incremental_form
+    from orchestrator.verify.loop_model import zoh_with_average
+
+    result = incremental_form(model, kp, kd)
+    ad, bd, c = model.discrete
+    _, _, average_c, average_d = zoh_with_average(*model.linear.state_space(), model.period)
+    derivative = FilteredDerivative(model.derivative_time_constant)
+    state, voltage, measured, errors = np.zeros((2, 1)), 0.0, 0.0, []
+    for _ in range(1500):
+        error = 0.1 - measured
+        rate = derivative.update(error, model.period)
+        voltage += model.volts_per_speed * model.e_range * (
+            kp * error / model.e_range + kd * rate / model.de_range)
+        measured = (average_c @ state).item() + average_d * voltage
+        state = ad @ state + bd * voltage
+        errors.append(abs(error))
+    late, early = max(errors[1000:1500]), max(errors[500:1000])
+    assert (late / early) ** (1 / 500) == pytest.approx(result["spectral_radius"], abs=2e-4)
