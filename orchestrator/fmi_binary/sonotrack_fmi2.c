@@ -410,7 +410,9 @@ static int start_python(const Binding *b, char *error, size_t size) {
         handle = dlopen(library, RTLD_NOW | RTLD_GLOBAL);
         if (handle == NULL) {
             snprintf(error, size, "the host runs no Python and libpython could not be loaded "
-                     "from %s (recorded at build; set SONOTRACK_LIBPYTHON): %s", library, dlerror());
+                     "from %.900s (%s): %s", library, library == b->libpython ?
+                     "recorded at build; set SONOTRACK_LIBPYTHON" : "from SONOTRACK_LIBPYTHON",
+                     dlerror());
             return -1;
         }
     }
@@ -443,10 +445,14 @@ static int start_python(const Binding *b, char *error, size_t size) {
         /* A C host: start the interpreter as the build's Python (its venv gives numpy). It is
          * never finalized: finalizing at unload or exit is what makes pythonfmu's binary abort. */
         const char *python = getenv("SONOTRACK_PYTHON");
-        if (python == NULL || python[0] == '\0') python = b->python;
+        const char *origin = "from SONOTRACK_PYTHON";
+        if (python == NULL || python[0] == '\0') {
+            python = b->python;
+            origin = "recorded at build; set SONOTRACK_PYTHON to a Python with numpy";
+        }
         if (!file_exists(python)) {
-            snprintf(error, size, "Python executable %s (recorded at build; set SONOTRACK_PYTHON "
-                     "to a Python %s with numpy) does not exist", python, b->python_version);
+            snprintf(error, size, "Python executable %.900s (%s) does not exist; the FMU was "
+                     "built with Python %s", python, origin, b->python_version);
             return -1;
         }
         if (py.SetProgramName != NULL && py.DecodeLocale != NULL) {

@@ -513,3 +513,21 @@ def test_string_parameter_reads_back_what_was_set(extracted):
     assert host.slave.getVersion() == "2.0"
     host.slave.terminate()
     host.free()
+
+
+@pytest.mark.parametrize("variable, words", [
+    ("SONOTRACK_PYTHON", ("Python executable /nonexistent/python (from SONOTRACK_PYTHON)",)),
+    ("SONOTRACK_LIBPYTHON", ("libpython could not be loaded from /nonexistent/",
+                             "from SONOTRACK_LIBPYTHON")),
+], ids=["python", "libpython"])
+def test_c_host_override_pointing_nowhere_is_refused_with_a_message(c_host, extracted, variable,
+                                                                     words):
+    plan, _ = _plan(extracted, ["WheelController"])
+    env = _host_env()
+    env[variable] = "/nonexistent/python" if variable == "SONOTRACK_PYTHON" else \
+        "/nonexistent/libpython3.11.so"
+    completed = subprocess.run([str(c_host)], input=plan, capture_output=True, text=True, env=env,
+                               cwd="/", timeout=120)
+    assert completed.returncode == 4  # fmi2Instantiate returned NULL; no crash
+    assert "returned NULL" in completed.stderr
+    assert all(word in completed.stderr for word in words), completed.stderr
