@@ -379,7 +379,8 @@ _PROBE = textwrap.dedent('''
             self.count = 0
             self.elapsed = 0.0
             self.input_integer("action", "0 ok, 1 InputError, 2 StepRejectedError, "
-                               "3 ZeroDivisionError, 4 return None, 5 return False")
+                               "3 ZeroDivisionError, 4 return None, 5 return False, "
+                               "6 log sys.prefix")
             self.parameter_boolean("refuse_init", "exit_initialization_mode returns False")
             self.output_integer("count", "steps taken")
             self.output_real("elapsed", "s", "time stepped")
@@ -396,6 +397,11 @@ _PROBE = textwrap.dedent('''
                 return 1 / 0
             if self.action == 4:
                 return None
+            if self.action == 6:
+                import sys
+                self.log(f"sys.prefix={sys.prefix}", Fmi2Status.warning)
+                self.count += 1
+                return True
             if self.action == 5:
                 self.log("refused by returning False", Fmi2Status.discard)
                 return False
@@ -410,7 +416,7 @@ _PROBE_RANGES = textwrap.dedent('''
     [step]
     step_size = { type = "Real", unit = "s", min = 1e-6, max = 1.0 }
     [inputs]
-    action = { type = "Integer", min = 0, max = 5 }
+    action = { type = "Integer", min = 0, max = 6 }
     [parameters]
     refuse_init = { type = "Boolean" }
 ''')
@@ -531,3 +537,16 @@ def test_c_host_override_pointing_nowhere_is_refused_with_a_message(c_host, extr
     assert completed.returncode == 4  # fmi2Instantiate returned NULL; no crash
     assert "returned NULL" in completed.stderr
     assert all(word in completed.stderr for word in words), completed.stderr
+
+
+def test_c_host_runs_the_builds_python_environment(c_host, probe):
+    """Without PYTHONPATH, the interpreter the FMU starts is the build's venv (its numpy)."""
+    folder, description = probe
+    refs = {v.name: v.valueReference for v in description.modelVariables}
+    binary = folder / "binaries" / "linux64" / "Probe.so"
+    plan = (f"1 1\n{binary} {description.guid} {(folder / 'resources').as_uri()} c_probe 0.01 "
+            f"0 1 {refs['action']} 0 1 {refs['elapsed']} 1 {refs['count']} 0\n6\n")
+    completed = _run_host(c_host, plan)
+    assert completed.returncode == 0, completed.stderr[-2000:]
+    assert completed.stdout.split() == ["0", "0", "0", "1"]  # step 0, FMU 0, elapsed, count
+    assert f"sys.prefix={sys.prefix}" in completed.stderr, completed.stderr
