@@ -164,8 +164,10 @@ class FmuInstance:
     def _note_failure(self, exc):
         """Remember an fmi2Fatal: after it the FMU may not be called again, not even freed.
 
-        (pythonfmu 0.7.0 releases the Python objects of an instance when it reports fmi2Fatal
-        and again when the instance is freed; freeing it anyway corrupts the interpreter.)
+        (pythonfmu 0.7.0's binary, still the one in our win64 FMUs, releases the Python objects
+        of an instance when it reports fmi2Fatal and again when the instance is freed; freeing
+        it anyway corrupts the interpreter. Our linux64 binary reports fmi2Fatal only when the
+        interpreter itself failed.)
         """
         if getattr(exc, "status", None) == 4:
             self._fatal = True

@@ -261,8 +261,9 @@ class SonotrackSlave(Fmi2Slave):
     def refuse(self, port, value, reason):
         """Log why an input is refused with an error status; ``do_step`` then returns False.
 
-        pythonfmu turns an exception in ``do_step`` into fmi2Fatal; returning False gives the
-        host fmi2Discard, and the logged line names the port and value.
+        Returning False from ``do_step`` gives the host fmi2Discard (a refused step) and the
+        logged line names the port and value; raising :class:`InputError` instead gives
+        fmi2Error (docs/fmi_binary.md lists how sonotrack's FMU binary maps each outcome).
         """
         self.log(f"{self.instance_name}: input {port} = {value!r} refused: {reason}",
                  Fmi2Status.error)
