@@ -16,8 +16,8 @@ from pathlib import Path
 
 __all__ = ["TABLES", "PAPER_SPEEDS", "CONTROLLERS", "FEEDFORWARD", "FRICTIONS", "RECORDED",
            "TABLE13_TARGET", "TABLE13_A_MAX", "TABLE13_V_MAX", "STOP_DISTANCE",
-           "TRACK_STOP_TIME", "SEC62_SOURCE_START", "SEC62_MODES", "TABLE67_TRACK_WIDTH",
-           "Cell", "Experiment", "plan", "table13_stop_time", "configuration"]
+           "TRACK_STOP_TIME", "PD_FORMS", "SEC62_SOURCE_START", "SEC62_MODES",
+           "TABLE67_TRACK_WIDTH",           "Cell", "Experiment", "plan", "t89_cell", "table13_stop_time", "configuration"]
 
 TABLES = ("table1", "table2", "table3", "table6", "table7", "table8", "table9", "sec6_2")
 PAPER_SPEEDS = (0.1, 0.2, 0.3, 0.4, 0.5)
@@ -57,6 +57,10 @@ FEEDFORWARD = {"ff_on": True, "ff_off": False}
 # the traction and the wheels slip (peak slip ratio 0.3-1.7 in a probe run; below 1.2 % at
 # mu = 0.1). It was chosen from that physics, not from the paper's numbers.
 FRICTIONS = {"mu_nominal": None, "mu_low": 0.05}
+# The PD form of FGS-PD (issue 14): when the WheelController build has an integral trim
+# (parameter trim_ki, default on), its FGS-PD cells also run as the pure PD of Eq. (46)
+# (trim_ki = 0), so the tables show what the choice of form changes. CPID has its own integral.
+PD_FORMS = {"as_built": None, "pure_pd": 0.0}
 
 RECORDED = ["source.x", "source.y", "source.emitting", "plant.x", "plant.y", "plant.heading",
             "plant.rim_speed_left", "plant.rim_speed_right", "plant.wheel_speed_left",
@@ -119,7 +123,13 @@ def _both(parameter, value):
     return {f"controller_left.{parameter}": value, f"controller_right.{parameter}": value}
 
 
-def plan(selected, speeds):
+def t89_cell(case, control, ff, friction, form="as_built"):
+    """Name of a Tables 8-9 cell (the built controller's form has no suffix)."""
+    suffix = "" if form == "as_built" else f"_{form}"
+    return f"t89_{case}_{control}_{ff}_{friction}{suffix}"
+
+
+def plan(selected, speeds, forms=("as_built",)):
     """The experiments (with their cells) needed for the selected tables.
 
     Parameters
@@ -128,6 +138,8 @@ def plan(selected, speeds):
         Names from :data:`TABLES`.
     speeds : sequence of float
         Speeds of Tables 1-3.
+    forms : sequence of str
+        Keys of :data:`PD_FORMS` to run the FGS-PD cells of Tables 8-9 with.
 
     Returns
     -------
@@ -157,13 +169,18 @@ def plan(selected, speeds):
                 for control in CONTROLLERS:
                     for ff, on in FEEDFORWARD.items():
                         for friction, mu in FRICTIONS.items():
-                            parameters = {**_both("mode", control), **_both("feedforward", on)}
-                            if mu is not None:
-                                parameters["plant.mu"] = mu
-                            experiment.cells.append(Cell(
-                                f"t89_{case}_{control}_{ff}_{friction}", experiment.name,
-                                parameters, {"case": case, "control": control,
-                                             "feedforward": ff, "friction": friction}))
+                            for form in (forms if control == "fgs_pd" else ("as_built",)):
+                                parameters = {**_both("mode", control),
+                                              **_both("feedforward", on)}
+                                if mu is not None:
+                                    parameters["plant.mu"] = mu
+                                if PD_FORMS[form] is not None:
+                                    parameters.update(_both("trim_ki", PD_FORMS[form]))
+                                experiment.cells.append(Cell(
+                                    t89_cell(case, control, ff, friction, form),
+                                    experiment.name, parameters,
+                                    {"case": case, "control": control, "feedforward": ff,
+                                     "friction": friction, "form": form}))
             if selected & {"table6", "table7"}:
                 experiment.cells.append(Cell(
                     f"t67_{case}_track040", experiment.name,
@@ -189,9 +206,14 @@ def plan(selected, speeds):
     return experiments
 
 
-def configuration():
+def configuration(forms=("as_built",)):
     """The study's stated assumptions, as printed at the top of the report."""
+    form = ("FGS-PD as built has an integral trim (trim_ki, docs/control.md); Tables 8-9 "
+            "also run it as the pure PD of Eq. (46) (trim_ki = 0)" if "pure_pd" in forms else
+            "FGS-PD as built: the PD of Eq. (46) (this WheelController build has no integral "
+            "trim parameter)")
     return {
+        "pd_form": form,
         "controller": "WheelController on each wheel; error e = v_ref - v_meas, every gain "
                       "positive. The paper's negative ranges (Kp in [-4, -3], Kd in [-2, -0.3]) "
                       "are read as magnitudes: kp 3..4, kd 0.3..2, 'Big' = the larger magnitude "

@@ -58,8 +58,9 @@ def paths(ax, runs, colour, label, alpha=0.35, source=False):
         if not run.ok:
             continue
         xy = run.source_xy() if source else run.xy()
+        count = sum(r.ok for r in runs)
         ax.plot(*xy.T, color=colour, lw=0.8, alpha=alpha,
-                label=f"{label} ({sum(r.ok for r in runs)} runs)" if first else None)
+                label=(f"{label} ({count} runs)" if count > 1 else label) if first else None)
         first = False
 
 

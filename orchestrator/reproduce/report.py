@@ -102,11 +102,16 @@ class Claim:
     claimed: str
     unit: str = ""
     paper: str = ""
+    reason: str = ""
 
     @property
     def verdict(self):
         """supported / not supported / inconclusive (:func:`statistics.judge`)."""
         return judge(self.estimate, self.threshold, self.claimed)
+
+    def likely_reason(self):
+        """Why the simulation may differ from the paper, when the claim is not supported."""
+        return "" if self.verdict == "supported" else self.reason
 
     def requirement(self):
         """The threshold as text, e.g. ``"< -0.0120 m"``."""
@@ -119,7 +124,7 @@ class Claim:
                 "measure": self.measure, "estimate": self.estimate.to_dict(),
                 "threshold": jsonable(self.threshold), "claimed": self.claimed,
                 "unit": self.unit, "requirement": self.requirement(), "paper": self.paper,
-                "verdict": self.verdict}
+                "verdict": self.verdict, "likely_reason": self.likely_reason()}
 
 
 @dataclass
@@ -224,12 +229,13 @@ class Report:
             "interval lies beyond the threshold on the claimed side, **not supported** if it "
             "lies wholly on the other side, **inconclusive** if it straddles the threshold. "
             "Totals: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".", "",
-            "| source | claim | condition | measure | interval | threshold | paper | verdict |",
-            "|---|---|---|---|---|---|---|---|"]
+            "| source | claim | condition | measure | interval | threshold | paper | verdict "
+            "| likely reason (where not supported) |",
+            "|---|---|---|---|---|---|---|---|---|"]
         for c in self.claims:
             verdicts.append(f"| {c.source} | {c.claim} | {c.condition} | {c.measure} | "
                             f"{c.estimate.text('.4g')} {c.unit} | {c.requirement()} | "
-                            f"{c.paper} | **{c.verdict}** |")
+                            f"{c.paper} | **{c.verdict}** | {c.likely_reason()} |")
         ratios = ["| table | row | quantity | paper | simulated mean [95 % interval] | "
                   "sim / paper |", "|---|---|---|---|---|---|"]
         for c in self.comparisons:
@@ -299,10 +305,10 @@ def _write_html(report, out_dir):
                       + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
     section.table([Column(h) for h in ("source", "claim", "condition", "measure",
                                        f"{level} % interval", "threshold", "paper",
-                                       "verdict")],
+                                       "verdict", "likely reason (where not supported)")],
                   [[c.source, c.claim, c.condition, c.measure,
                     f"{c.estimate.text('.4g')} {c.unit}".strip(), c.requirement(), c.paper,
-                    c.verdict] for c in report.claims])
+                    c.verdict, c.likely_reason()] for c in report.claims])
     for table in report.tables.values():
         section = page.section(table.title)
         section.table([Column(header) for _, header, _ in table.columns],

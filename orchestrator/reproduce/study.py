@@ -49,6 +49,18 @@ def check_selection(tables, speeds):
     return selected, tuple(sorted(round(float(s), 3) for s in set(speeds)))
 
 
+def _pd_forms(fmu_dir):
+    """The FGS-PD forms to run: the built one, and the pure PD if the build has a trim."""
+    from orchestrator.system import load_system
+
+    from .experiments import Experiment
+
+    system = load_system(Experiment("probe", "", "static_case1.toml", 1.0, {})
+                         .base_scenario().system, fmu_dir=fmu_dir)
+    names = {v.name for v in system.component("controller_left").model_description.modelVariables}
+    return ("as_built", "pure_pd") if "trim_ki" in names else ("as_built",)
+
+
 def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, speeds=None,
               scheduler=None, runs=RUNS_PER_CELL, study_seed=0, stop_time_scale=1.0,
               tolerances=None):
@@ -98,7 +110,8 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
     out_dir.mkdir(parents=True, exist_ok=True)
     paper = load_paper_tables()
     tolerance_list = load_tolerances(tolerances)
-    experiments = plan(selected, speeds)
+    forms = _pd_forms(fmu_dir)
+    experiments = plan(selected, speeds, forms)
     started = time.perf_counter()
     study = run_study(experiments, tolerance_list, runs, out_dir, fmu_dir=fmu_dir,
                       workers=workers, scheduler=scheduler, progress=progress,
@@ -134,7 +147,7 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
                 "stop_time_scale": stop_time_scale, "workers": workers or os.cpu_count(),
                 "scheduler": "given" if scheduler else "local",
                 "run_time_s": run_seconds}
-    report = Report(configuration(), tolerance_list, DEFINITIONS, ordered, claims, ratios,
+    report = Report(configuration(forms), tolerance_list, DEFINITIONS, ordered, claims, ratios,
                     settings=settings, out_dir=out_dir)
     report.figures = write_figures(study, analysis, out_dir, speeds, tracking_bounds())
     report.settings["wall_time_s"] = time.perf_counter() - started

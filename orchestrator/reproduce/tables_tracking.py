@@ -6,7 +6,8 @@ not others. Sec. 6.2's tracking test has bounds derived from the speeds
 (:func:`tracking_bounds`), so it can fail.
 """
 
-from .experiments import CONTROLLERS, FEEDFORWARD, FRICTIONS, SEC62_MODES
+from .experiments import (CONTROLLERS, FEEDFORWARD, FRICTIONS, PD_FORMS, SEC62_MODES,
+                          t89_cell)
 from .report import Claim, Comparison, Table
 from .tables_motion import BETTER_MARGIN
 
@@ -42,8 +43,43 @@ def tracking_bounds(v_source=0.2, v_cruise=0.3, a_max=0.4, fix_period=0.1, start
             "final_gap_error_m": v_cruise ** 2 / (2.0 * a_max) + v_cruise * fix_period}
 
 
-def _t89(case, control, ff, friction):
-    return f"t89_{case}_{control}_{ff}_{friction}"
+# Likely reasons, shown where a claim is not supported (hypotheses from the model's physics).
+_FF_REASON = ("with the motor-model feedforward both loops supply the reference's voltage "
+              "directly and track within the encoder's 26 mm/s quantum, leaving the gain "
+              "schedule little to improve; the paper's CPID errors resemble a loop without "
+              "feedforward")
+_NO_FF_REASON = ("without feedforward the error is a P-type steady-state error "
+                 "v_ref / (1 + kp); the controllers differ by their gains, not their schedule")
+_LOW_MU_REASON = ("at mu 0.05 the wheels spin during the ramps whatever the controller: the "
+                  "outcome is set by traction (and varies strongly between runs)")
+_SLIP_REASON = ("at mu 0.8 the grip far exceeds what the manoeuvres need (peak slip ratio about "
+                "1 %), so no controller can reduce slip; at mu 0.05 both spin")
+_TRACK_REASON = ("the bound is derived from the speeds before any run; exceeding it means the "
+                 "follower lags more than the source drives during one reaction time")
+_INSIDE_REASON = ("the follower aims each fix at where the source is heard, so it cuts the "
+                  "source's curves only if the lag is long compared with the curve's length")
+_CURVE_REASON = ("the follower re-plans every 100 ms, so rotate-then-go's legs are short and "
+                 "its turns small: the two modes drive nearly the same path")
+
+
+def _controller_reason(ff, mu):
+    if mu == "mu_low":
+        return _LOW_MU_REASON
+    return _FF_REASON if ff == "ff_on" else _NO_FF_REASON
+
+
+_FORM = {"as_built": "", "pure_pd": ", FGS-PD as pure PD"}
+
+
+def _forms(analysis):
+    """The FGS-PD forms the study ran (the built one, and the pure PD if it could)."""
+    return [f for f in PD_FORMS
+            if f == "as_built" or analysis.has(t89_cell("static", "fgs_pd", "ff_on",
+                                                        "mu_nominal", f))]
+
+
+def _condition(ff, mu, form="as_built"):
+    return f"{_FF[ff]}, {_MU[mu]}{_FORM[form]}"
 
 
 def _paper_value(table, column, case, control):
@@ -55,12 +91,13 @@ def _paper_value(table, column, case, control):
 
 
 def _better(analysis, source, claim, key, unit, fgs, pid, condition, paper_text,
-            margin=BETTER_MARGIN):
+            margin=BETTER_MARGIN, reason=""):
     reference = analysis.estimate(pid, key)
     threshold = -margin * reference.mean if reference.n else 0.0
     return Claim(source, claim, condition,
                  f"mean paired difference {key}(CFGS-PD) - {key}(CPID)",
-                 analysis.difference(fgs, pid, key), threshold, "below", unit, paper_text)
+                 analysis.difference(fgs, pid, key), threshold, "below", unit, paper_text,
+                 reason)
 
 
 def controller_tables(analysis, selected, paper):
@@ -68,6 +105,9 @@ def controller_tables(analysis, selected, paper):
     tables, claims, ratios = {}, [], []
     printed, rmse_printed = paper["table8_curvature_tracking"], paper["table9_rmse"]
     conditions = [(ff, mu) for ff in FEEDFORWARD for mu in FRICTIONS]
+    forms = _forms(analysis)
+    # one row per controller and condition; FGS-PD once per form it was run in
+    variants = [("pid", "as_built")] + [("fgs_pd", f) for f in forms]
     if "table8" in selected:
         t = Table("table8", "Table 8: curvature tracking, CPID vs CFGS-PD, by condition",
                   [("case", "case", ""), ("control", "control", ""),
@@ -77,10 +117,10 @@ def controller_tables(analysis, selected, paper):
                    ("error_paper", "paper", ".3f"), ("slip", "peak slip ratio", ".3f")])
         for case in _CASES:
             for ff, mu in conditions:
-                for control in CONTROLLERS:
-                    cell = _t89(case, control, ff, mu)
+                for control, form in variants:
+                    cell = t89_cell(case, control, ff, mu, form)
                     row = {"case": _CASES[case], "control": CONTROLLERS[control],
-                           "condition": f"{_FF[ff]}, {_MU[mu]}",
+                           "condition": _condition(ff, mu, form),
                            "distance": analysis.estimate(cell, "distance_m"),
                            "time": analysis.estimate(cell, "arrival_s"),
                            "error": analysis.estimate(cell, "error_m"),
@@ -91,21 +131,24 @@ def controller_tables(analysis, selected, paper):
                         row[f"{key}_paper"] = _paper_value(printed, column, case, control)
                         if mu == "mu_nominal":
                             ratios.append(Comparison(
-                                "Table 8", f"{_CASES[case]}, {CONTROLLERS[control]}, {_FF[ff]}",
-                                f"{key} [{unit}]", row[f"{key}_paper"], row[key]))
+                                "Table 8", f"{_CASES[case]}, {CONTROLLERS[control]}, "
+                                f"{_FF[ff]}{_FORM[form]}", f"{key} [{unit}]",
+                                row[f"{key}_paper"], row[key]))
                     t.rows.append(row)
             for ff, mu in conditions:
-                claims.append(_better(
-                    analysis, "Table 8", f"{_CASES[case]}: CFGS-PD has a lower final error "
-                    "than CPID", "error_m", "m", _t89(case, "fgs_pd", ff, mu),
-                    _t89(case, "pid", ff, mu), f"{_FF[ff]}, {_MU[mu]}",
-                    f"{_paper_value(printed, 'error_m', case, 'fgs_pd')} vs "
-                    f"{_paper_value(printed, 'error_m', case, 'pid')}"))
-                claims.append(_better(
-                    analysis, "Sec. 4.1 / 7", f"{_CASES[case]}: CFGS-PD makes the wheels slip "
-                    "less than CPID (peak slip ratio)", "peak_slip", "",
-                    _t89(case, "fgs_pd", ff, mu), _t89(case, "pid", ff, mu),
-                    f"{_FF[ff]}, {_MU[mu]}", "(text only)"))
+                for form in forms:
+                    fgs, pid = (t89_cell(case, "fgs_pd", ff, mu, form),
+                                t89_cell(case, "pid", ff, mu))
+                    claims.append(_better(
+                        analysis, "Table 8", f"{_CASES[case]}: CFGS-PD has a lower final "
+                        "error than CPID", "error_m", "m", fgs, pid, _condition(ff, mu, form),
+                        f"{_paper_value(printed, 'error_m', case, 'fgs_pd')} vs "
+                        f"{_paper_value(printed, 'error_m', case, 'pid')}",
+                        reason=_controller_reason(ff, mu)))
+                    claims.append(_better(
+                        analysis, "Sec. 4.1 / 7", f"{_CASES[case]}: CFGS-PD makes the wheels "
+                        "slip less than CPID (peak slip ratio)", "peak_slip", "", fgs, pid,
+                        _condition(ff, mu, form), "(text only)", reason=_SLIP_REASON))
         t.notes += ["Scenarios static_case1.toml and dynamic_case2.toml with planner "
                     "stop_distance 0 (the paper's robot drives to the target). Error: "
                     "distance to the (second) target at the end of the 12 s run.",
@@ -119,25 +162,28 @@ def controller_tables(analysis, selected, paper):
                    ("rmse_speed", "wheel-speed RMS error [m/s]", ".4f")])
         for case in _CASES:
             for ff, mu in conditions:
-                for control in CONTROLLERS:
-                    cell = _t89(case, control, ff, mu)
+                for control, form in variants:
+                    cell = t89_cell(case, control, ff, mu, form)
                     row = {"case": _CASES[case], "control": CONTROLLERS[control],
-                           "condition": f"{_FF[ff]}, {_MU[mu]}",
+                           "condition": _condition(ff, mu, form),
                            "rmse": analysis.estimate(cell, "rmse_path_m"),
                            "rmse_paper": _paper_value(rmse_printed, "rmse", case, control),
                            "rmse_speed": analysis.estimate(cell, "rmse_speed_m_s")}
                     if mu == "mu_nominal":
                         ratios.append(Comparison(
-                            "Table 9", f"{_CASES[case]}, {CONTROLLERS[control]}, {_FF[ff]}",
-                            "RMSE [m]", row["rmse_paper"], row["rmse"]))
+                            "Table 9", f"{_CASES[case]}, {CONTROLLERS[control]}, "
+                            f"{_FF[ff]}{_FORM[form]}", "RMSE [m]", row["rmse_paper"],
+                            row["rmse"]))
                     t.rows.append(row)
             for ff, mu in conditions:
-                claims.append(_better(
-                    analysis, "Table 9", f"{_CASES[case]}: CFGS-PD has a lower path RMSE "
-                    "than CPID", "rmse_path_m", "m", _t89(case, "fgs_pd", ff, mu),
-                    _t89(case, "pid", ff, mu), f"{_FF[ff]}, {_MU[mu]}",
-                    f"{_paper_value(rmse_printed, 'rmse', case, 'fgs_pd')} vs "
-                    f"{_paper_value(rmse_printed, 'rmse', case, 'pid')}"))
+                for form in forms:
+                    claims.append(_better(
+                        analysis, "Table 9", f"{_CASES[case]}: CFGS-PD has a lower path RMSE "
+                        "than CPID", "rmse_path_m", "m", t89_cell(case, "fgs_pd", ff, mu, form),
+                        t89_cell(case, "pid", ff, mu), _condition(ff, mu, form),
+                        f"{_paper_value(rmse_printed, 'rmse', case, 'fgs_pd')} vs "
+                        f"{_paper_value(rmse_printed, 'rmse', case, 'pid')}",
+                        reason=_controller_reason(ff, mu)))
         t.notes.append("The paper does not define Table 9's RMSE; it follows Fig. 17 "
                        "(trajectories) and Table 3 (path RMSE), so it is set beside our path "
                        "RMSE from the ideal arc(s). The wheel-speed RMS error has no paper "
@@ -180,16 +226,17 @@ def tracking_tables(analysis):
             claims.append(Claim(source, f"the robot tracks the source ({what} within the "
                                 "bound from the speeds)", condition, f"mean {key}",
                                 analysis.estimate(main, key), bound, "below", "m",
-                                "'tracked well'"))
+                                "'tracked well'", _TRACK_REASON))
         claims.append(Claim(source, "the source mutes at the end and the robots do not collide",
                             condition, "mean smallest gap min_gap_m",
                             analysis.estimate(main, "min_gap_m"), BODY_LENGTH, "above", "m",
-                            "'the end was mute'"))
+                            "'the end was mute'", "the follower closes in below one body "
+                            "length before the planner's stop distance takes effect"))
         if path == "s_curve":
             claims.append(Claim(source, "the robot runs inside the source's path", condition,
                                 "mean inward_offset_m (smaller apex)",
                                 analysis.estimate(main, "inward_offset_m"), 0.0, "above", "m",
-                                "(text, Fig. 27)"))
+                                "(text, Fig. 27)", _INSIDE_REASON))
         rotate = f"sec62_{path}_rotate_then_go_fgs_pd"
         reference = analysis.estimate(rotate, "rmse_source_path_m")
         claims.append(Claim(
@@ -198,14 +245,15 @@ def tracking_tables(analysis):
             "mean paired difference RMSE(curvature) - RMSE(rotate then go)",
             analysis.difference(main, rotate, "rmse_source_path_m"),
             -BETTER_MARGIN * reference.mean if reference.n else 0.0, "below", "m",
-            "(figures only)"))
+            "(figures only)", _CURVE_REASON))
         pid = f"sec62_{path}_curvature_pid"
         slip_ref = analysis.estimate(pid, "peak_slip")
         claims.append(Claim(
             "Sec. 6.2 / 7", "CFGS-PD makes the wheels slip less than CPID (peak slip ratio)",
             f"{path}, curvature", "mean paired difference peak_slip(CFGS-PD) - (CPID)",
             analysis.difference(main, pid, "peak_slip"),
-            -BETTER_MARGIN * slip_ref.mean if slip_ref.n else 0.0, "below", "", "(text only)"))
+            -BETTER_MARGIN * slip_ref.mean if slip_ref.n else 0.0, "below", "", "(text only)",
+            _SLIP_REASON))
     t.notes += [f"Bounds of the tracking test, derived from the speeds before any run "
                 f"(source 0.2 m/s, follower 0.3 m/s, a_max 0.4 m/s^2, fix every 0.1 s, start "
                 f"gap 1 m): largest gap <= {bounds['max_gap_m']:.3f} m, path RMSE <= "
