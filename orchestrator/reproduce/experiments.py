@@ -17,7 +17,8 @@ from pathlib import Path
 __all__ = ["TABLES", "PAPER_SPEEDS", "CONTROLLERS", "FEEDFORWARD", "FRICTIONS", "RECORDED",
            "TABLE13_TARGET", "TABLE13_A_MAX", "TABLE13_V_MAX", "STOP_DISTANCE",
            "TRACK_STOP_TIME", "PD_FORMS", "SEC62_SOURCE_START", "SEC62_MODES",
-           "TABLE67_TRACK_WIDTH",           "Cell", "Experiment", "plan", "t89_cell", "table13_stop_time", "configuration"]
+           "TABLE67_TRACK_WIDTH", "Cell", "Experiment", "plan", "t89_cell",
+           "table13_stop_time", "configuration"]
 
 TABLES = ("table1", "table2", "table3", "table6", "table7", "table8", "table9", "sec6_2")
 PAPER_SPEEDS = (0.1, 0.2, 0.3, 0.4, 0.5)
