@@ -5,8 +5,9 @@ import math
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.reproduce import (PAPER_SPEEDS, TABLES, check_selection, formula_profiles,
-                                    load_paper_tables, mean_interval)
+from orchestrator.reproduce import (PAPER_SPEEDS, TABLES, check_selection, configuration,
+                                    formula_profiles, load_paper_tables, mean_interval, plan,
+                                    tracking_bounds)
 from orchestrator.reproduce.report import Table
 
 
@@ -59,3 +60,39 @@ def test_report_table_prints_estimates_beside_the_paper():
     # mean 2.0, s = 0.1, t(0.975, 2) = 4.3027: half width 0.248
     assert "| 0.1 | 2.000 [1.752, 2.248] | 2.050 |" in text
     assert "| 0.2 | - (2 missing) | 2.300 |" in text
+
+
+def test_plan_runs_every_condition_and_form_as_data():
+    from orchestrator.reproduce.experiments import t89_cell
+
+    experiments = plan(set(TABLES), PAPER_SPEEDS, forms=("as_built", "pure_pd"))
+    cells = {c.name: c for e in experiments for c in e.cells}
+    # Tables 1-3: 5 speeds x 2 modes; Tables 8-9: 2 cases x (CPID 4 + CFGS-PD 4 x 2 forms)
+    # + 2 track-0.40 cells; Sec. 6.2: 2 paths x 3
+    assert len(cells) == 10 + 2 * (4 + 8) + 2 + 6
+    pure = cells[t89_cell("static", "fgs_pd", "ff_off", "mu_low", "pure_pd")].parameters
+    assert pure["controller_left.trim_ki"] == pure["controller_right.trim_ki"] == 0.0
+    assert pure["controller_left.feedforward"] is False and pure["plant.mu"] == 0.05
+    built = cells[t89_cell("static", "fgs_pd", "ff_on", "mu_nominal")].parameters
+    assert "controller_left.trim_ki" not in built and "plant.mu" not in built
+    sec62 = next(e for e in experiments if e.name == "sec6_2")
+    # the paper's start: 1 m away, 45 deg to the right of the robot facing +y
+    assert (sec62.parameters["source.x0"], sec62.parameters["source.y0"]) == \
+        pytest.approx((math.sin(math.pi / 4), math.cos(math.pi / 4)))
+    assert len(plan({"table1"}, (0.3,))[0].cells) == 2
+
+
+def test_configuration_states_the_verdict_deciding_assumptions():
+    text = " ".join(configuration().values())
+    for needed in ("feedforward", "Kp in [-4, -3]", "0.289", "mu = 0.05", "10 ms", "45 deg"):
+        assert needed in text
+    assert "pure PD" in configuration(("as_built", "pure_pd"))["pd_form"]
+
+
+def test_tracking_bounds_follow_from_the_speeds():
+    bounds = tracking_bounds()
+    lag = 0.2 * (0.1 + 0.3 / 0.4)                   # source speed x (fix + ramp to cruise)
+    assert bounds["max_gap_m"] == pytest.approx(1.0 + lag)
+    assert bounds["rmse_m"] == pytest.approx(lag)
+    assert bounds["final_gap_error_m"] == pytest.approx(0.3 ** 2 / 0.8 + 0.03)
+    assert tracking_bounds(v_source=0.4)["max_gap_m"] > bounds["max_gap_m"]
