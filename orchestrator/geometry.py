@@ -62,9 +62,22 @@ def distance_to_path(points, polyline, chunk=256):
     """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     polyline = np.asarray(polyline, dtype=float).reshape(-1, 2)
-    parts = [distance_to_polyline(points[i:i + chunk], polyline)
-             for i in range(0, len(points), chunk)]
-    return np.concatenate(parts) if parts else np.zeros(0)
+    if len(polyline) == 1 or len(points) == 0:
+        return distance_to_polyline(points, polyline) if len(points) else np.zeros(0)
+    # the projection on every segment, coordinate by coordinate on 2-D (points x segments)
+    # arrays: several times faster than norms over a 3-D array
+    ax, ay = polyline[:-1, 0], polyline[:-1, 1]
+    dx, dy = np.diff(polyline[:, 0]), np.diff(polyline[:, 1])
+    length2 = dx * dx + dy * dy
+    length2 = np.where(length2 > 0, length2, 1.0)
+    parts = []
+    for i in range(0, len(points), chunk):
+        rx = points[i:i + chunk, 0, None] - ax
+        ry = points[i:i + chunk, 1, None] - ay
+        along = np.clip((rx * dx + ry * dy) / length2, 0.0, 1.0)
+        ex, ey = rx - along * dx, ry - along * dy
+        parts.append(np.sqrt(np.min(ex * ex + ey * ey, axis=1)))
+    return np.concatenate(parts)
 
 
 def path_rmse(xy, reference, spacing=RESAMPLE_SPACING):

@@ -7,7 +7,8 @@ import pytest
 
 from components.common.errors import ConfigError
 from orchestrator.geometry import (apex_offsets, arrival_time, circle_fit_radius,
-                                   path_length, path_rmse, resample_path, tangent_arc_path)
+                                   distance_to_path, path_length, path_rmse, resample_path,
+                                   tangent_arc_path)
 
 
 def _arc(centre, radius, start_angle, stop_angle, count=2001):
@@ -123,3 +124,14 @@ def test_apex_offsets_signs_inside_and_outside():
     assert [a["inward_offset_m"] for a in outside] == pytest.approx([-0.1, -0.1])
     straight = np.column_stack([np.zeros_like(u), 1.0 + u])
     assert apex_offsets(straight, straight) == []
+
+
+def test_distance_to_path_equals_the_segment_distance_of_metrics():
+    from orchestrator.metrics import distance_to_polyline
+
+    rng = np.random.default_rng(1)
+    polyline = np.cumsum(rng.normal(size=(300, 2)), axis=0)
+    points = rng.normal(size=(1000, 2)) * 10
+    expected = distance_to_polyline(points, polyline)
+    assert np.allclose(distance_to_path(points, polyline, chunk=64), expected, atol=1e-12)
+    assert np.allclose(distance_to_path(points, polyline[:1]), np.hypot(*(points - polyline[0]).T))
