@@ -76,13 +76,14 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
                                                        "inconclusive"}
     assert all(c["requirement"][0] in "<>" for c in data["claims"])
     # every printed number of Tables 1-3 (2 speeds), 6-7 and 8-9 (nominal friction, both
-    # feedforward settings) has a ratio row
+    # feedforward settings; CPID, CFGS-PD with its integral trim and as pure PD) has a ratio row
     per_table = {}
     for row in data["paper_ratios"]:
         per_table[row["table"]] = per_table.get(row["table"], 0) + 1
     assert per_table == {"Table 1": 6, "Table 2": 8, "Table 3": 4, "Table 6": 8,
-                         "Table 7": 13, "Table 8": 24, "Table 9": 8}
-    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 28
+                         "Table 7": 13, "Table 8": 36, "Table 9": 12}
+    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 36
+    assert "integral trim" in data["configuration"]["pd_form"]
     text = (out / "reproduction.md").read_text() + (out / "reproduction.json").read_text()
     assert str(out) not in text and "/tmp" not in text
     assert not [s for s in _strings(data) if s.startswith("/")]
