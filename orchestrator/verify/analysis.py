@@ -15,7 +15,7 @@ from .loop_model import zoh_with_average
 
 __all__ = ["GainAnalysis", "analyse_gains", "stability_boundary", "continuous_gain_bound",
            "controller_cross_check", "kp_edge", "routh_bounds", "spectral_radii",
-           "incremental_form",
+           "incremental_form", "final_value", "step_figures",
            "KP_SEARCH_MAX"]
 
 # Beyond this kp the search for the stability edge stops. With the defaults the edge is near
@@ -63,7 +63,7 @@ def analyse_gains(model, kp, kd, ki=0.0, duration=1.5, settling_threshold=0.05):
     GainAnalysis
         Margins are those of ``C H`` (python-control ``stability_margins``; gain margin as a
         factor, inf when the phase never crosses -180 deg). Step figures are for the true
-        rim speed after a reference step (``step_info``); ``peak_voltage_per_speed`` is the
+        rim speed after a reference step (``step_info`` against the exact final value); ``peak_voltage_per_speed`` is the
         largest voltage per m/s of reference step, and ``linear_step_limit_m_s`` the largest
         step from rest that stays below ``v_supply`` (the analysis is linear below it).
     """
@@ -76,12 +76,15 @@ def analyse_gains(model, kp, kd, ki=0.0, duration=1.5, settling_threshold=0.05):
     gm, pm, _, wpc, wgc, _ = control.stability_margins(loop)
     steps = int(round(duration / model.period))
     times = np.arange(steps + 1) * model.period
-    rim = control.step_response(model.closed_loop_tf(kp, kd, ki, "rim"), times)
+    rim_tf = model.closed_loop_tf(kp, kd, ki, "rim")
+    rim = control.step_response(rim_tf, times)
     voltage = control.step_response(model.closed_loop_tf(kp, kd, ki, "voltage"), times)
     stable = radius < 1.0
     if stable:
-        info = control.step_info(rim.outputs, times, SettlingTimeThreshold=settling_threshold)
-        overshoot, rise, settle = info["Overshoot"], info["RiseTime"], info["SettlingTime"]
+        # Judge against the true final value (final value theorem), not the last sample: with
+        # an integrator the slow mode is still moving at the end of the window.
+        overshoot, rise, settle = step_figures(rim.outputs, times, final_value(rim_tf),
+                                               settling_threshold)
     else:
         overshoot = rise = settle = float("nan")
     peak = float(np.max(np.abs(voltage.outputs)))
@@ -118,6 +121,39 @@ def spectral_radii(polynomials):
     companion[:, 0, :] = -p[:, 1:] / p[:, :1]
     companion[:, np.arange(1, n), np.arange(n - 1)] = 1.0
     return np.max(np.abs(np.linalg.eigvals(companion)), axis=1)
+
+
+def step_figures(response, times, final, threshold=0.05):
+    """Overshoot [%], 10-90 % rise time [s] and settling time [s] of a sampled step response.
+
+    The same definitions as python-control's ``step_info``, against a given ``final`` value
+    (its ``step_info`` fails when the response never reaches 90 % in the window). A time that
+    is never reached is ``inf``; settling is the first sample after which the response stays
+    within ``threshold * |final|``.
+    """
+    y = np.asarray(response, dtype=float)
+    t = np.asarray(times, dtype=float)
+    overshoot = max(0.0, 100.0 * (np.max(y) - final) / abs(final)) if final else math.nan
+
+    def first(level):
+        index = np.flatnonzero(y >= level) if final > 0 else np.flatnonzero(y <= level)
+        return t[index[0]] if index.size else math.inf
+
+    rise = first(0.9 * final) - first(0.1 * final)
+    outside = np.flatnonzero(np.abs(y - final) > threshold * abs(final))
+    if outside.size == 0:
+        settle = float(t[0])
+    elif outside[-1] + 1 < t.size:
+        settle = float(t[outside[-1] + 1])
+    else:
+        settle = math.inf
+    return float(overshoot), float(rise), settle
+
+
+def final_value(tf):
+    """``T(1)``: the final value of a stable discrete TF's unit step (final value theorem)."""
+    num, den = np.asarray(tf.num[0][0]), np.asarray(tf.den[0][0])
+    return float(np.polyval(num, 1.0) / np.polyval(den, 1.0))
 
 
 def _spectral_radius(polynomial):

@@ -16,6 +16,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .analysis import final_value, step_figures
+
 __all__ = ["PlantVariant", "RobustnessPoint", "plant_grid", "robustness_point",
            "steady_state_error"]
 
@@ -78,12 +80,10 @@ def steady_state_error(model, kp, kd, ki=0.0):
     float
         Meaningful only when the loop is stable.
     """
-    tf = model.closed_loop_tf(kp, kd, ki, "rim")
-    num, den = np.asarray(tf.num[0][0]), np.asarray(tf.den[0][0])
-    return float(1.0 - np.polyval(num, 1.0) / np.polyval(den, 1.0))
+    return 1.0 - final_value(model.closed_loop_tf(kp, kd, ki, "rim"))
 
 
-def robustness_point(model, variant, controller, gains, duration=6.0):
+def robustness_point(model, variant, controller, gains, duration=60.0):
     """Stability, steady-state error and settling of ``controller`` on one plant variant.
 
     Parameters
@@ -101,7 +101,6 @@ def robustness_point(model, variant, controller, gains, duration=6.0):
     -------
     RobustnessPoint
     """
-    import control
     from scipy.signal import lfilter
 
     scaled = replace(model, gain_factor=variant.gain_factor,
@@ -118,8 +117,8 @@ def robustness_point(model, variant, controller, gains, duration=6.0):
         tf = scaled.closed_loop_tf(kp, kd, ki, "rim")
         # lfilter on a unit step is the TF's step response (python-control's is 20x slower).
         response = lfilter(tf.num[0][0], tf.den[0][0], np.ones(times.size))
-        info = control.step_info(response, times, SettlingTimeThreshold=0.05)
-        settling = max(settling, float(info["SettlingTime"]))
+        _, _, settle = step_figures(response, times, final_value(tf), 0.05)
+        settling = max(settling, settle)
     return RobustnessPoint(controller=controller, gain_factor=variant.gain_factor,
                            time_constant_factor=variant.time_constant_factor,
                            gains=[list(map(float, g)) for g in gains],

@@ -144,3 +144,35 @@ def test_incremental_form_poles_match_a_simulation_of_the_incremental_law(model,
         errors.append(abs(error))
     late, early = max(errors[1000:1500]), max(errors[500:1000])
     assert (late / early) ** (1 / 500) == pytest.approx(result["spectral_radius"], abs=2e-4)
+
+
+def test_step_figures_use_the_exact_final_value_not_the_last_sample(model):
+    # With the integral trim the slow integrator mode still moves at the end of the 1.5 s
+    # window: overshoot must be measured against T(1) = 1, found here from the samples of a
+    # 200 s response (independent of the final value theorem).
+    import control
+
+    result = analyse_gains(model, 3.0, 0.3, 0.5)
+    times = np.arange(10001) * model.period
+    long = control.step_response(model.closed_loop_tf(3.0, 0.3, 0.5), times).outputs
+    assert long[-1] == pytest.approx(1.0, abs=1e-6)
+    peak = np.max(long[: int(1.5 / model.period) + 1])
+    assert result.overshoot_pct == pytest.approx(100 * (peak - 1.0), abs=1e-6)
+    assert result.overshoot_pct > 1.0  # the last-sample reading said 0.08 %
+
+
+@pytest.mark.parametrize("kp,kd,ki", [(3.0, 0.3, 0.0), (4.0, 2.0, 0.0), (3.0, 1.0, 0.5)],
+                         ids=["pd-min", "pd-max", "pid"])
+def test_step_figures_equal_python_controls_step_info(model, kp, kd, ki):
+    import control
+
+    from orchestrator.verify.analysis import final_value, step_figures
+
+    times = np.arange(76) * model.period
+    tf = model.closed_loop_tf(kp, kd, ki)
+    y = control.step_response(tf, times).outputs
+    info = control.step_info(y, times, final_output=final_value(tf), SettlingTimeThreshold=0.05)
+    assert step_figures(y, times, final_value(tf)) == pytest.approx(
+        (info["Overshoot"], info["RiseTime"], info["SettlingTime"]), abs=1e-12)
+    # Never settling inside the window is inf, not the window's end.
+    assert step_figures(y[:5], times[:5], final_value(tf))[2] == float("inf")
