@@ -1,7 +1,7 @@
 """The paper's mode: one constant-curvature arc per fix, progress counted by the encoders."""
 
 from .arc_drive import arc_limits, arc_wheel_speeds
-from .geometry import arc_curvature, arc_length, stop_arc_length, wheel_arc_lengths
+from .geometry import RESOLVABLE_DISTANCE, arc_curvature, arc_length, stop_arc_length, wheel_arc_lengths
 
 __all__ = ["CurvatureMode"]
 
@@ -67,8 +67,9 @@ class CurvatureMode:
 
     def _plan(self, planner, distance, bearing):
         self.progress = 0.0
-        if distance <= planner.stop_distance:
-            # Already close enough: keep the present ratio and brake along it.
+        if distance <= max(planner.stop_distance, RESOLVABLE_DISTANCE):
+            # Already close enough (or closer than anything measurable, where 2 sin(theta) / D
+            # overflows to inf): keep the present ratio and brake along it.
             self.length = 0.0
         else:
             self.curvature = arc_curvature(distance, bearing)

@@ -9,6 +9,7 @@ import math
 
 __all__ = [
     "RADIUS_STRAIGHT",
+    "RESOLVABLE_DISTANCE",
     "arc_curvature",
     "arc_length",
     "stop_arc_length",
@@ -20,6 +21,11 @@ __all__ = [
 # Finite stand-in for the infinite radius of a straight path (kappa = 0 is the exact statement):
 # FMI Reals may carry inf, but CSV recorders, plots and SSP tools handle a finite value better.
 RADIUS_STRAIGHT = 1.0e6
+
+# A fix nearer than this is at the target: far below the encoders' 0.52 mm per count and the
+# localizer's resolution, and large enough that 2 sin(theta) / D stays finite (a subnormal D
+# overflowed the curvature to inf and the wheel speeds to NaN).
+RESOLVABLE_DISTANCE = 1.0e-9
 
 
 def arc_curvature(distance, bearing):

@@ -202,3 +202,16 @@ def test_speed_and_acceleration_limits_hold_at_every_step(mode, fixes, stop, tra
         assert abs(left - previous[0]) <= a_max * step * (1 + 1e-9)
         assert abs(right - previous[1]) <= a_max * step * (1 + 1e-9)
         previous = (left, right)
+
+
+@pytest.mark.parametrize("mode", sorted(MODES), ids=sorted(MODES))
+@pytest.mark.parametrize("distance", [5e-324, 2.2e-309, 1e-12], ids=["min-subnormal", "subnormal", "1e-12"])
+def test_a_fix_nearer_than_anything_measurable_stops_with_finite_speeds(mode, distance):
+    # Found by hypothesis: in curvature mode 2 sin(theta) / D overflowed to inf and the wheel
+    # speeds became NaN for a subnormal distance.
+    planner = TargetPlanner(track_width=0.289, v_cruise=0.3, v_max=0.4, a_max=0.4,
+                            stop_distance=0.0, mode=mode)
+    _, trace = run(planner, lambda k, robot: (1, True, distance, 0.5), 2.0, 0.289, 0.02,
+                   stop_when_idle=False)
+    assert all(math.isfinite(value) for row in trace for value in row[:2])
+    assert trace[-1][0] == 0.0 and trace[-1][1] == 0.0
