@@ -43,9 +43,10 @@ DEFINITIONS = {
     "peak_slip": "largest |longitudinal slip ratio| of either wheel over the run",
     "slip_time_s": f"time during which either wheel's |slip ratio| > {SLIP_THRESHOLD}",
     "cruise_m_s": "median true rim speed while the planner's wheel reference is within 1 % of "
-                  "its plateau in that segment",
-    "ramp_m_s2": "least-squares slope of the true rim speed while the wheel reference ramps "
-                 "up from 10 % to 90 % of its plateau (first ramp of the segment)",
+                  "its plateau (the median of its held, non-zero values) in that segment",
+    "ramp_m_s2": "|least-squares slope| of the true rim speed while the wheel reference covers "
+                 "10 % to 90 % of its first change to the plateau (from rest, or from the "
+                 "previous arc's speed)",
     "encoder_m": "encoder counts of the segment x 2 pi r / 728 with the nominal r = 0.06 m "
                  "(the robot's own odometry)",
     "gap_m": "distance between the robot's and the source's true centres",
@@ -113,21 +114,29 @@ def _segment_bounds(run, segments):
     return [(0, int(turned[0])), (int(turned[0]), n)]
 
 
-def _ramp_slope(time, reference, speed):
-    plateau = float(np.max(reference)) if len(reference) else 0.0
-    if plateau <= 0.0:
+def _plateau(reference):
+    """The wheel reference's cruise value in a segment: the median of the samples where it is
+    held (changes by < 0.1 mm/s per sample, far below a ramp's 8 mm/s at 0.4 m/s^2 and 20 ms)
+    and not at rest; None if it is never held."""
+    held = np.abs(np.diff(reference)) < 1e-4
+    values = reference[1:][held & (np.abs(reference[1:]) > 1e-3)]
+    return float(np.median(values)) if len(values) else None
+
+
+def _ramp_slope(time, reference, speed, plateau):
+    """|slope| of the rim speed over 10-90 % of the reference's first change to its plateau
+    (from rest in segment 1, from the previous arc's speed in segment 2)."""
+    change = plateau - reference[0]
+    if abs(change) < 1e-3:
+        return None                 # the segment starts at its cruise speed: no ramp
+    progress = (reference - reference[0]) / change
+    reached = np.nonzero(progress >= 0.9)[0]
+    if len(reached) == 0:
         return None
-    rising = np.nonzero(reference >= 0.1 * plateau)[0]
-    if len(rising) == 0:
+    part = np.nonzero(progress[:reached[0] + 1] >= 0.1)[0]
+    if len(part) < 3:
         return None
-    start = int(rising[0])
-    top = np.nonzero(reference[start:] >= 0.9 * plateau)[0]
-    if len(top) == 0:
-        return None
-    stop = start + int(top[0]) + 1
-    if stop - start < 3:
-        return None
-    return float(np.polyfit(time[start:stop], speed[start:stop], 1)[0])
+    return float(abs(np.polyfit(time[part], speed[part], 1)[0]))
 
 
 def wheel_profile(run, segments=1):
@@ -151,11 +160,14 @@ def wheel_profile(run, segments=1):
                 figures.update({f"{side}_cruise_m_s": None, f"{side}_ramp_m_s2": None,
                                 f"{side}_encoder_m": None})
                 continue
-            plateau = float(np.max(reference))
-            cruising = np.abs(reference - plateau) <= 0.01 * max(plateau, 1e-9)
-            figures[f"{side}_cruise_m_s"] = (float(np.median(speed[cruising]))
-                                             if cruising.any() and plateau > 0 else None)
-            figures[f"{side}_ramp_m_s2"] = _ramp_slope(time[start:stop], reference, speed)
+            plateau = _plateau(reference)
+            if plateau is None:
+                figures.update({f"{side}_cruise_m_s": None, f"{side}_ramp_m_s2": None})
+            else:
+                cruising = np.abs(reference - plateau) <= 0.01 * abs(plateau)
+                figures[f"{side}_cruise_m_s"] = float(np.median(speed[cruising]))
+                figures[f"{side}_ramp_m_s2"] = _ramp_slope(time[start:stop], reference, speed,
+                                                           plateau)
             last = min(stop, len(counts)) - 1
             figures[f"{side}_encoder_m"] = float((counts[last] - counts[start]) * per_count)
         profiles.append(figures)

@@ -228,7 +228,7 @@ def profile_tables(analysis, selected, paper):
                            "paper": printed[side][quantity]}
                     for width, tag in ((0.40, "040"), (0.289, "0289")):
                         row[f"sim{tag}"] = analysis.estimate(cells[width].format(case=case),
-                                                             key, segment=segment)
+                                                             f"{side}_{key}", segment=segment)
                         row[f"formula{tag}"] = formulas[width][profile][f"{side}_{quantity}"]
                     table.rows.append(row)
                     ratios.append(Comparison(label, row["quantity"], "L=0.40 sim",

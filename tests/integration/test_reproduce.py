@@ -82,6 +82,9 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
         per_table[row["table"]] = per_table.get(row["table"], 0) + 1
     assert per_table == {"Table 1": 6, "Table 2": 8, "Table 3": 4, "Table 6": 8,
                          "Table 7": 13, "Table 8": 36, "Table 9": 12}
+    # Table 6 from the simulated wheels: every row has a simulated mean beside the paper's
+    assert all(row["ratio"] is not None for row in data["paper_ratios"]
+               if row["table"] == "Table 6")
     assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 36
     assert "integral trim" in data["configuration"]["pd_form"]
     text = (out / "reproduction.md").read_text() + (out / "reproduction.json").read_text()
