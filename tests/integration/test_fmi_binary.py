@@ -550,3 +550,23 @@ def test_c_host_runs_the_builds_python_environment(c_host, probe):
     assert completed.returncode == 0, completed.stderr[-2000:]
     assert completed.stdout.split() == ["0", "0", "0", "1"]  # step 0, FMU 0, elapsed, count
     assert f"sys.prefix={sys.prefix}" in completed.stderr, completed.stderr
+
+
+_UNLOAD_RELOAD = textwrap.dedent('''
+    import sys
+    import fmpy
+    for round_ in range(2):  # fmpy unloads (dlclose) each binary when simulate_fmu returns
+        for path in sys.argv[1:]:
+            result = fmpy.simulate_fmu(path, stop_time=0.1)
+            assert len(result) > 1
+    print("done", flush=True)
+''')
+
+
+def test_python_host_unloading_and_reloading_every_fmu_exits_cleanly(fmu_paths):
+    completed = subprocess.run([sys.executable, "-c", _UNLOAD_RELOAD,
+                                *[str(fmu_paths[name]) for name in NAMES]],
+                               capture_output=True, text=True, cwd="/", timeout=600)
+    assert completed.returncode == 0, completed.stderr[-3000:]
+    assert completed.stdout.strip() == "done"
+    assert not any(sign in completed.stderr for sign in ABORT_SIGNS), completed.stderr[-3000:]
