@@ -1,8 +1,10 @@
 """The ``sonotrack`` command line: thin sub-commands over the library functions.
 
 Each sub-command imports its module lazily and calls one library function with the same
-argument names. Errors of ours (:class:`SonotrackError`) print one line, no traceback, and
-exit non-zero.
+argument names. Errors of ours (:class:`SonotrackError`) print one line per problem, no
+traceback, and exit non-zero (2, or the error's ``exit_status``); so do command-line mistakes
+(one line, not argparse's usage block). Anything else is a bug: one line naming the exception,
+exit status 3, and the traceback only with ``SONOTRACK_TRACEBACK=1``.
 """
 
 import argparse
@@ -60,20 +62,24 @@ def _cmd_validate(args):
 
 def _cmd_run(args):
     from orchestrator.run import run_scenario
+    from orchestrator.scenario import load_scenario, parse_seconds
 
+    record_interval = parse_seconds(args.record_interval, "--record-interval")
     scenario = args.scenario or DEFAULT_SCENARIO
-    if not Path(scenario).is_file():
+    if not Path(scenario).exists():
         raise SonotrackError(f"scenario file {scenario} does not exist; shipped scenarios: "
                              f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
+    # a directory, bad TOML, a bad field: one line each, before anything is loaded
+    loaded = load_scenario(scenario, allow_outside=args.allow_outside)
     out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
     try:
-        result = run_scenario(scenario, out, progress=not args.quiet, algorithm=args.master,
+        result = run_scenario(loaded, out, progress=not args.quiet, algorithm=args.master,
                               plots=not args.no_plots,
-                              fmu_dir=args.fmu_dir, record_interval=args.record_interval,
+                              fmu_dir=args.fmu_dir, record_interval=record_interval,
                               fsync=args.fsync, allow_outside=args.allow_outside)
     except SonotrackError as exc:
         if "not found at" in str(exc):
-            raise SonotrackError(f"{exc}\n  (build the FMUs first: `sonotrack build`, or "
+            raise SonotrackError(f"{exc} (build the FMUs first: `sonotrack build`, or "
                                  "point --fmu-dir at them)") from exc
         raise
     summary = result.summary
@@ -131,8 +137,15 @@ def _workers(text):
     return value
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (``sonotrack run: error: ...``), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser(command=None):
-    parser = argparse.ArgumentParser(prog="sonotrack", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="sonotrack", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
 
     build = sub.add_parser("build", help="build the FMUs into fmus/ (and fmus/tracking.ssp)")
@@ -152,8 +165,9 @@ def _parser(command=None):
     run.add_argument("--master", choices=("gauss-seidel", "jacobi"),
                      help="override the scenario's master algorithm")
     run.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
-    run.add_argument("--record-interval", type=float, default=0.02,
-                     help="simulated seconds between recorded rows (default 0.02)")
+    run.add_argument("--record-interval", default="0.02",
+                     help="simulated seconds between recorded rows, in (0, 3600] "
+                          "(default 0.02)")
     run.add_argument("--fsync", action="store_true",
                      help="fsync results.csv once a simulated second (default: at the end)")
     run.add_argument("--no-plots", action="store_true",
@@ -224,8 +238,16 @@ def main(argv=None):
         print(f"sonotrack {args.command}: error: {exc}", file=sys.stderr)
         return getattr(exc, "exit_status", 2)
     except KeyboardInterrupt:
-        print(f"sonotrack {args.command}: interrupted", file=sys.stderr)
+        print(f"sonotrack {args.command}: interrupted (Ctrl-C); nothing more was computed",
+              file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug of ours: one line, the traceback on request
+        if os.environ.get("SONOTRACK_TRACEBACK"):
+            raise
+        text = " ".join(str(exc).split()) or "(no message)"
+        print(f"sonotrack {args.command}: internal error: {type(exc).__name__}: {text} (set "
+              "SONOTRACK_TRACEBACK=1 to see where; please report it)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":
