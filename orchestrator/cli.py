@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from components.common.errors import SonotrackError
+from components.common.errors import SimulationError, SonotrackError
 
 __all__ = ["main"]
 
@@ -77,6 +77,8 @@ def _cmd_run(args):
                               plots=not args.no_plots,
                               fmu_dir=args.fmu_dir, record_interval=record_interval,
                               fsync=args.fsync, allow_outside=args.allow_outside)
+    except SimulationError as exc:   # a model refused: name the scenario file too
+        raise SimulationError(f"{scenario}: {exc}") from exc
     except SonotrackError as exc:
         if "not found at" in str(exc):
             raise SonotrackError(f"{exc} (build the FMUs first: `sonotrack build`, or "
@@ -89,6 +91,11 @@ def _cmd_run(args):
             value = summary[key]
             print(f"  {key:28s} {value:.4g}" if isinstance(value, float) else
                   f"  {key:28s} {value}")
+    if loaded.parameters:   # the values this run used, as the scenario gave them
+        from components.common.ranges import show
+
+        used = ", ".join(f"{k} = {show(v)}" for k, v in sorted(loaded.parameters.items()))
+        print(f"  {'parameters':28s} {used}")
     print(f"results: {result.out_dir.resolve()}")
     return 0
 

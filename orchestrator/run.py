@@ -303,6 +303,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
         summary["robustness"] = fault_summary_from_csv(
             folder.results_csv, getattr(scenario, "faults", ()), stop_distance)
+        error = _non_finite_metrics(summary, error)
     folder.write_summary(summary)
     written = []
     interrupted = summary["status"] == "interrupted"
@@ -319,6 +320,22 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     if error is not None:
         raise SimulationError(f"{error} (results so far in {folder.results_csv})")
     return result
+
+
+def _non_finite_metrics(summary, error):
+    """A finished run whose distance metrics are NaN or inf did not give a result: say so.
+
+    Sets the summary's status to ``failed`` with the metrics named, and returns the error
+    text (``error`` unchanged if the run had already failed or the metrics are finite).
+    """
+    bad = sorted(k for k, v in summary.items()
+                 if k.endswith("_m") and isinstance(v, float) and not math.isfinite(v))
+    if not bad or error is not None:
+        return error
+    error = (f"metrics not finite: {', '.join(f'{k} = {summary[k]!r}' for k in bad)} "
+             "(a recorded position is not finite or beyond what the metrics can measure)")
+    summary.update(status="failed", error=error)
+    return error
 
 
 # Plots read results.csv thinned to this many rows: a line of 20,000 points is finer than

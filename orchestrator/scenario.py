@@ -34,6 +34,7 @@ from pathlib import Path
 
 from components.common.errors import ConfigError
 from orchestrator.faults import check_faults, faults_to_dicts
+from components.common.ranges import show
 
 __all__ = [
     "DEFAULT_MAX_STEPS",
@@ -167,7 +168,7 @@ class _Checker:
 
     def number(self, name, value, minimum, maximum=None):
         if not _is_number(value):
-            self.add(name, f"{value!r} is {_type_name(value)}, expected a number")
+            self.add(name, f"{show(value)} is {_type_name(value)}, expected a number")
             return None
         if not math.isfinite(value):
             self.add(name, f"{value!r} is not finite, expected a number > {minimum:g}")
@@ -183,7 +184,7 @@ class _Checker:
     def integer(self, name, value, minimum, maximum=None):
         maximum = _SEED_MAX if maximum is None else maximum
         if not isinstance(value, int) or isinstance(value, bool):
-            self.add(name, f"{value!r} is {_type_name(value)}, expected an integer")
+            self.add(name, f"{show(value)} is {_type_name(value)}, expected an integer")
             return None
         if (minimum is not None and value < minimum) or value > maximum:
             self.add(name, f"{value!r} is outside {minimum}..{maximum}")
@@ -192,7 +193,7 @@ class _Checker:
 
     def string(self, name, value):
         if not isinstance(value, str):
-            self.add(name, f"{value!r} is {_type_name(value)}, expected a string")
+            self.add(name, f"{show(value)} is {_type_name(value)}, expected a string")
             return None
         return value
 
@@ -207,7 +208,7 @@ class _Checker:
 
     def steps(self, name, value):
         if not isinstance(value, dict):
-            self.add(name, f"{value!r} is {_type_name(value)}, expected {_KIND_TEXT['steps']}")
+            self.add(name, f"{show(value)} is {_type_name(value)}, expected {_KIND_TEXT['steps']}")
             return None
         steps = {}
         for instance, step in value.items():
@@ -218,7 +219,7 @@ class _Checker:
 
     def parameters(self, name, value):
         if not isinstance(value, dict):
-            self.add(name, f"{value!r} is {_type_name(value)}, "
+            self.add(name, f"{show(value)} is {_type_name(value)}, "
                            f"expected {_KIND_TEXT['parameters']}")
             return None
         flat = {}
@@ -232,7 +233,7 @@ class _Checker:
                     self.add(where, f"{qualified!r} is not of the form 'instance.parameter'")
                 elif isinstance(scalar, (dict, list)) or not isinstance(
                         scalar, (bool, int, float, str)):
-                    self.add(where, f"{scalar!r} is {_type_name(scalar)}, expected a number, "
+                    self.add(where, f"{show(scalar)} is {_type_name(scalar)}, expected a number, "
                                     f"integer, boolean or string")
                 elif isinstance(scalar, float) and not math.isfinite(scalar):
                     self.add(where, f"{scalar!r} is not finite")
@@ -244,7 +245,7 @@ class _Checker:
 
     def ports(self, name, value):
         if not isinstance(value, list):
-            self.add(name, f"{value!r} is {_type_name(value)}, expected {_KIND_TEXT['ports']}")
+            self.add(name, f"{show(value)} is {_type_name(value)}, expected {_KIND_TEXT['ports']}")
             return None
         ports = []
         for position, item in enumerate(value):
@@ -259,6 +260,8 @@ class _Checker:
 
 def _is_multiple(step, base):
     ratio = step / base
+    if not math.isfinite(ratio):   # e.g. 1e308 / 0.01: more steps than a float counts
+        return False, ratio
     count = round(ratio)
     return count >= 1 and abs(ratio - count) <= STEP_TOLERANCE * ratio, ratio
 
@@ -587,7 +590,8 @@ def _check_against_system(check, values, system_path, allow_outside=False):
                 continue   # unknown names are reported by the system layer with the FMU's list
             problem = entry.problem(bound.value)
             if problem is not None:
-                check.problems.append(f"{system_path}: parameter binding of component "
+                where = getattr(bound, "source", None) or system_path
+                check.problems.append(f"{where}: parameter binding of component "
                                       f"'{component.name}': {component.name}.{problem}")
 
 

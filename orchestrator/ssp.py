@@ -94,11 +94,14 @@ class ParameterValue:
     origin : pathlib.Path or None
         Folder of the file that bound it (the ``.ssd`` or ``.ssv``): a file-valued string
         (a waypoint CSV) is relative to it, see :meth:`run_value`.
+    source : str or None
+        The ``.ssv`` file the value was read from, for messages (None: inline in the ``.ssd``).
     """
 
     type: str
     value: float | int | bool | str
     origin: Path | None = field(default=None, compare=False)
+    source: str | None = field(default=None, compare=False)
 
     def run_value(self):
         """The value a run passes to the FMU: a relative file path resolved from ``origin``."""
@@ -389,8 +392,9 @@ def _read_parameter_bindings(component, bindings, directory, problems, allow_out
                                       f"ssv:ParameterSet")
                 continue
             sub_problems = _Problems(ssv_path)
-            parameters.update(_read_parameter_set(ssv_root, sub_problems, ssv_path.parent,
-                                                  allow_outside))
+            parameters.update({name: replace(value, source=str(ssv_path)) for name, value in
+                               _read_parameter_set(ssv_root, sub_problems, ssv_path.parent,
+                                                   allow_outside).items()})
             problems.lines.extend(sub_problems.lines)
             continue
         values = _child(binding, _ssd("ParameterValues"))

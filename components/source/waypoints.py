@@ -4,7 +4,11 @@ import numpy as np
 
 from ..common.errors import ParameterError
 
-__all__ = ["read_waypoints"]
+__all__ = ["read_waypoints", "WAYPOINT_LIMIT"]
+
+# Largest |x| or |y| of a waypoint [m]: the same 10 km as the start pose's valid range
+# (ranges.toml), far beyond any arena, and small enough that path lengths stay finite.
+WAYPOINT_LIMIT = 10000.0
 
 
 def read_waypoints(path):
@@ -54,6 +58,10 @@ def read_waypoints(path):
             raise ParameterError(
                 f"{path}, line {number}: {text!r} is not a waypoint; expected two finite "
                 "numbers 'x,y' in metres")
+        if max(abs(values[0]), abs(values[1])) > WAYPOINT_LIMIT:
+            raise ParameterError(
+                f"{path}, line {number}: {text!r} is outside the valid range "
+                f"[-{WAYPOINT_LIMIT:g}, {WAYPOINT_LIMIT:g}] m of a waypoint coordinate")
         points.append(values)
     if len(points) < 2:
         raise ParameterError(f"{path}: has {len(points)} waypoint(s); a path needs at least 2 "

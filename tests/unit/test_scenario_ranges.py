@@ -95,3 +95,32 @@ def test_a_bad_binding_in_the_ssd_is_refused_naming_the_ssd(tmp_path):
     # a scenario override of the same parameter replaces the binding
     scenario_from_dict({"stop_time": 1.0, "system": str(ssd),
                         "parameters": {"plant.mass": 4.5}}, source="s.toml")
+
+
+def test_a_run_whose_metrics_are_not_finite_is_not_ok():
+    from orchestrator.run import _non_finite_metrics
+
+    summary = {"status": "ok", "path_rmse_m": float("nan"), "final_distance_to_source_m": 1.0,
+               "realtime_factor": float("inf")}
+    error = _non_finite_metrics(summary, None)
+    assert summary["status"] == "failed" and summary["error"] == error
+    assert error.startswith("metrics not finite: path_rmse_m = nan")
+    finite = {"status": "ok", "path_rmse_m": 0.1, "realtime_factor": float("inf")}
+    assert _non_finite_metrics(finite, None) is None and finite["status"] == "ok"
+
+
+@pytest.mark.parametrize("type_name, value, problem", [
+    ("Integer", 10.7, "is float, expected an fmi2Integer value"),
+    ("Integer", 2**32 + 10, "does not fit a 32-bit fmi2Integer"),
+    ("Integer", True, "is bool, expected an fmi2Integer value"),
+    ("Real", True, "is bool, expected an fmi2Real value"),
+    ("Real", "0.3", "is str, expected an fmi2Real value"),
+    ("Boolean", "false", "is str, expected an fmi2Boolean value"),
+    ("Boolean", 1, "is int, expected an fmi2Boolean value"),
+    ("String", 5, "is int, expected an fmi2String value"),
+    ("Real", 3, ""), ("Integer", 10, ""), ("Boolean", False, ""), ("String", "pd", ""),
+], ids=repr)
+def test_fmu_handle_sets_values_without_coercion(type_name, value, problem):
+    from orchestrator.fmu import _type_problem
+
+    assert _type_problem(type_name, value) == problem
