@@ -245,7 +245,7 @@ def main(argv=None):
         print(f"sonotrack {args.command}: error: {exc}", file=sys.stderr)
         return getattr(exc, "exit_status", 2)
     except KeyboardInterrupt:
-        print(f"sonotrack {args.command}: interrupted (Ctrl-C); nothing more was computed",
+        print(f"sonotrack {args.command}: interrupted (Ctrl-C)",
               file=sys.stderr)
         return 130
     except Exception as exc:  # a bug of ours: one line, the traceback on request
