@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from components.common.errors import ConfigError
-from orchestrator.faults import check_faults, faults_to_dicts
 from components.common.ranges import show
+from orchestrator.faults import check_faults, faults_to_dicts
 
 __all__ = [
     "DEFAULT_MAX_STEPS",
