@@ -9,7 +9,8 @@ its relative imports rewritten to the private package: pythonfmu 0.7.0's binary 
 slave class *defined* in the entry module (a class merely imported there instantiates once and
 then corrupts the interpreter on the second instance, as seen with two WheelControllers). The model description comes out compliant because every slave
 derives from :class:`components.common.slave.SonotrackSlave`; :func:`build_fmu` checks that.
-Finally the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.fmi_binary`).
+Then the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.fmi_binary`), and
+finally :mod:`orchestrator.fmu_docs` adds the metadata and ``documentation/index.html``.
 """
 
 import importlib
@@ -23,6 +24,7 @@ from xml.etree import ElementTree
 
 from components.common.errors import BuildError
 from orchestrator.fmi_binary import build_tag, install_binary
+from orchestrator.fmu_docs import document_fmu
 
 __all__ = [
     "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "entry_script", "private_package_name",
@@ -111,6 +113,8 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
             importlib.invalidate_caches()
     _check_built(Path(fmu_path), name)
     install_binary(fmu_path, private, name, name)
+    # last: metadata and documentation/index.html from the final modelDescription.xml
+    document_fmu(fmu_path, slave_file, components_dir.parent / "docs" / f"{subpackage}.md")
     return Path(fmu_path)
 
 
