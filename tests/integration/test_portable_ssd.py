@@ -17,7 +17,7 @@ from orchestrator.run import run_scenario
 from orchestrator.scenario import scenario_from_dict
 from orchestrator.ssp import read_ssd
 
-from .ecos_host import ecos_binary, read_ecos_csv, run_ecos
+from orchestrator.ecos_host import ecos_binary, read_ecos_csv, run_ecos
 from .test_fmus import DRIVES
 
 pytestmark = pytest.mark.integration
