@@ -101,9 +101,13 @@ def _routh(coefficients, epsilon, zero_tolerance):
         row = table[i]
         if i >= 2:
             lower, upper = upper, table[i - 2]
-            scale = max(np.max(np.abs(upper)), np.max(np.abs(lower)))
             row[:-1] = (lower[0] * upper[1:] - upper[0] * lower[1:]) / lower[0]
-            row[np.abs(row) <= zero_tolerance * scale] = 0.0
+            # Cancellation residue of each element is relative to the two terms it was
+            # computed from, not to the row's largest entry: with clustered roots the
+            # coefficients span many decades, and a row-wide scale zeroed true small entries
+            # (four poles at z = 0.999 were called unstable).
+            terms = np.abs(upper[1:]) + np.abs(upper[0] * lower[1:] / lower[0])
+            row[:-1][np.abs(row[:-1]) <= zero_tolerance * terms] = 0.0
         if not np.any(row):
             previous = table[i - 1]
             power = degree - i + 1

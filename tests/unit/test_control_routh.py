@@ -193,3 +193,24 @@ def test_discrete_gain_bound_of_a_second_order_polynomial():
 def test_gain_search_range_is_checked():
     with pytest.raises(ParameterError):
         stable_gain_intervals([1, 1], [1], gain_max=0.0)
+
+
+
+_CLUSTERS = [(m, r, a) for m in (2, 3, 4, 5) for r in (0.99, 0.998, 0.999, 1.001, 1.01)
+             for a in (0.0, 0.3) if (m, r) not in ((5, 0.998), (5, 0.999))]
+
+
+@pytest.mark.parametrize("multiplicity, radius, angle", _CLUSTERS,
+                         ids=[f"{m}x{r}{'-pair' if a else ''}" for m, r, a in _CLUSTERS])
+def test_clustered_roots_near_z_equals_one(multiplicity, radius, angle):
+    # Clustered roots near z = 1 (slow poles, as an integral trim adds) give w-plane
+    # coefficients spanning many decades; a row-wide zero tolerance in the Routh table called
+    # four poles at z = 0.999 unstable. Five-fold clusters at 0.998-0.999 are left out: the
+    # rounded coefficients' own roots leave the circle (|z| up to 1.0003), so double precision
+    # does not decide them.
+    root = radius * np.exp(1j * angle)
+    roots = [root.real] * multiplicity if angle == 0.0 else [root, np.conj(root)] * multiplicity
+    coefficients = np.poly(roots).real
+    numeric = np.max(np.abs(np.roots(coefficients)))
+    assert (numeric < 1.0) == (radius < 1.0)  # the reference decides this case
+    assert is_schur(coefficients) == (radius < 1.0)
