@@ -31,15 +31,14 @@ SLIP_THRESHOLD = 0.2
 # Slower than this, the robot counts as stopped (the encoder quantum at 20 ms is 26 mm/s).
 STOPPED_SPEED = 0.03
 
-_STATUS_NAMES = ("ok", "not emitting", "source behind the array", "source closer than min_range",
-                 "source beyond max_range", "no burst onset detected", "weak correlation peak",
-                 "correlation peak on the +-l/c bound", "delays geometrically inconsistent",
-                 "estimated range beyond max_range", "a microphone record is dead",
-                 "a microphone record is clipped", "fix lost (dropped before it was taken)")
+def _status_names():
+    from components.acoustics.localizer import FixStatus
+
+    return FixStatus.NAMES
 
 
-def _status_name(code):
-    return _STATUS_NAMES[code] if 0 <= code < len(_STATUS_NAMES) else f"code {code}"
+def _status_name(code, names):
+    return names[code] if 0 <= code < len(names) else f"code {code}"
 
 
 def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
@@ -72,6 +71,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     have = set(columns)
     missing = [c for c in wanted if c not in header]
 
+    names = _status_names()
     invalid, last_attempts, previous_time = {}, None, None
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
     active_time = {t: 0.0 for t in targets}
@@ -99,7 +99,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
             last_attempts = int(attempts[-1])
             for row in np.flatnonzero(rise):
                 if status[row] != 0:
-                    name = _status_name(int(status[row]))
+                    name = _status_name(int(status[row]), names)
                     invalid[name] = invalid.get(name, 0) + 1
                 if rise[row] > 1:
                     invalid["unrecorded"] = invalid.get("unrecorded", 0) + int(rise[row]) - 1
