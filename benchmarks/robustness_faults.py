@@ -2,13 +2,12 @@
 
 For each scenario: injected (the target reported the fault active), survived (every check of
 :func:`orchestrator.fault_metrics.survival`), final distance, max slip ratio, invalid fixes,
-fixes the planner's gate rejected. Target: all survived. Writes
-``benchmarks/results/robustness_faults.json``; with ``--plots DIR`` also one PNG per kind
+fixes the planner's gate rejected. Target: all survived. Writes the ``faults`` section of
+``benchmarks/results/robustness.json`` (the file's other sections, written by
+``benchmarks/robustness.py``, are kept); with ``--plots DIR`` also one PNG per kind
 (``docs/faults/`` holds the committed ones)::
 
     .venv/bin/python benchmarks/robustness_faults.py --plots docs/faults
-
-:func:`fault_rows` is what ``benchmarks/robustness.py`` reports as its ``faults`` section.
 """
 
 import argparse
@@ -19,7 +18,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks._common import build_fresh, write_result  # noqa: E402
+from benchmarks._common import RESULTS, build_fresh  # noqa: E402
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios" / "faults"
 
@@ -87,11 +86,37 @@ def main(argv=None):
     survived = sum(row["survived"] for row in rows)
     print(f"survived {survived} of {len(rows)} (target: all)")
     if not args.names:
-        path = write_result("robustness_faults", {
+        path = write_section("faults", {
             "target": "every fault scenario survived",
             "survived": survived, "scenarios": len(rows), "met": survived == len(rows),
-            "faults": rows})
-        print(f"wrote {path}")
+            "runs": rows})
+        print(f"wrote the faults section of {path}")
+
+
+def write_section(name, section):
+    """Set one top-level section of ``robustness.json``, keeping the others; return the path."""
+    import json
+
+    from orchestrator.outputs import atomic_write_json
+
+    path = RESULTS / "robustness.json"
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, ValueError):
+        record = {}
+    record[name] = dict(section, machine=machine_info(),
+                        generated_utc=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    atomic_write_json(path, record)
+    return path
+
+
+def machine_info():
+    import os
+    import platform
+
+    return {"python": platform.python_version(), "cpus": os.cpu_count(),
+            "load_average_1min": os.getloadavg()[0]}
 
 
 if __name__ == "__main__":
