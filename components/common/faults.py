@@ -201,10 +201,9 @@ def check_entry(entry, model=None, targeted=True):
         naming the bad value and the valid choices.
     """
     problems = []
-    if not isinstance(entry, dict):
-        return None, None, [("", f"{entry!r} is not a table of "
-                                 f"{', '.join(_FIELDS if targeted else _FIELDS[:1] + _FIELDS[2:])}")]
     allowed = _FIELDS if targeted else tuple(f for f in _FIELDS if f != "target")
+    if not isinstance(entry, dict):
+        return None, None, [("", f"{entry!r} is not a table of {', '.join(allowed)}")]
     for key in entry:
         if key not in allowed:
             problems.append((key, f"unknown field; valid fields: {', '.join(allowed)}"))

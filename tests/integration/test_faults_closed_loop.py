@@ -3,8 +3,8 @@
 Survived means: no NaN or inf in any recorded output; body speed never above the planner's
 v_max by more than 5 %; never closer to the source than stop_distance / 2; after a fault that
 ends, the final distance is within 0.3 m of stop_distance; after a permanent one, the robot
-has stopped (a floor patch counts as ending: the robot can drive off it). A kind the loop does not survive is an xfail with the measured numbers, not a
-looser assertion.
+has stopped (a floor patch counts as ending: the robot can drive off it). A kind the loop
+does not survive is an xfail with the measured numbers, not a looser assertion.
 """
 
 from pathlib import Path

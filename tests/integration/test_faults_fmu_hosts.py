@@ -77,7 +77,8 @@ def test_libcosim_applies_a_fault_from_the_ssd_like_our_master(fmu_dir, tmp_path
     time = np.array([float(r["time"]) for r in ours_rows])
     assert theirs.shape == ours.shape
     slowest = max(c.step_size_hint for c in system.components)
-    common = np.arange(round(slowest / system.base_step) - 1, len(ours), round(slowest / system.base_step))
+    ratio = round(slowest / system.base_step)
+    common = np.arange(ratio - 1, len(ours), ratio)
     assert float(np.max(np.abs(ours[common] - theirs[common]))) <= 1e-12
     # the fault did act: no new fix while M2 is dead, fixes before and after
     distance = ours[:, columns.index("localizer.distance")]

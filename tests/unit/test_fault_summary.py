@@ -1,4 +1,4 @@
-"""The run summary's robustness section, on a results file whose counts are known by construction."""
+"""The run summary's robustness section, on a results file with counts known by construction."""
 
 import math
 

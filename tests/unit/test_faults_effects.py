@@ -84,7 +84,8 @@ def test_reflecting_wall_adds_the_image_source_burst():
                                                               magnitude=wall_x)], rng_a)
     without = faulted_records(s, _RANGES, None, [], rng_b)
     echo = with_wall - without
-    start = math.floor((min(_RANGES) / s.speed_of_sound - s.pre_roll) * s.sample_rate) / s.sample_rate
+    first = min(_RANGES) / s.speed_of_sound - s.pre_roll
+    start = math.floor(first * s.sample_rate) / s.sample_rate
     times = start + np.arange(s.record_samples) / s.sample_rate
     for mic, distance in enumerate(image_ranges):
         expected = 0.9 * 0.5 / distance * s.burst.waveform(times - distance / s.speed_of_sound)
