@@ -267,7 +267,7 @@ def kills(work, count, seed=11):
         old = _files(out) if existing else {}
         process = _run_process(scenario, out)
         try:
-            process.wait(timeout=rng.uniform(0.3, 1.1) * duration)
+            process.wait(timeout=rng.uniform(0.2, 1.0) * duration)
         except subprocess.TimeoutExpired:
             process.send_signal(signal.SIGKILL)
         process.communicate()
@@ -276,7 +276,8 @@ def kills(work, count, seed=11):
         findings = _stale(out, old, stop_time)
         # resume: run again into the same folder; it must finish ok with nothing stale
         before = _files(out) if out.exists() else {}
-        completed, _ = _cli(["run", str(scenario), "--out", str(out), "--quiet"])
+        completed, seconds = _cli(["run", str(scenario), "--out", str(out), "--quiet"])
+        duration = seconds  # the machine's load moves: aim the next kill at this run's length
         record["resumed"] += 1
         summary = _summary(out)
         ok = completed.returncode == 0 and summary is not None and summary["status"] == "ok"
@@ -421,10 +422,7 @@ def main(argv=None):
                 "RobotPlant")):
         sys.exit("build the FMUs first: make fmus")
     path = RESULTS / "robustness.json"
-    try:
-        record = json.loads(path.read_text())
-    except (OSError, ValueError):
-        record = {}
+    record = {}
     work = Path(tempfile.mkdtemp(prefix="sonotrack_robustness_"))
     try:
         for name in chosen:
@@ -442,6 +440,7 @@ def main(argv=None):
             else:
                 sys.exit(f"unknown section {name!r}; sections: {', '.join(SECTIONS)}")
             record[name]["benchmark_seconds"] = round(time.monotonic() - started, 1)
+            record[name]["measured_utc"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
             print(json.dumps({name: {k: v for k, v in record[name].items()
                                      if k not in ("own", "findings")}}, indent=2))
     finally:
@@ -452,7 +451,14 @@ def main(argv=None):
     RESULTS.mkdir(parents=True, exist_ok=True)
     from orchestrator.outputs import atomic_write_json
 
-    atomic_write_json(path, record)
+    # read just before writing: sections written meanwhile by another script (e.g. faults)
+    # or by another run of this one (other --only sections) are kept
+    try:
+        kept = json.loads(path.read_text())
+    except (OSError, ValueError):
+        kept = {}
+    kept.update(record)
+    atomic_write_json(path, kept)
     print(f"wrote {path}")
 
 

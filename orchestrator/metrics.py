@@ -152,10 +152,10 @@ def tracking_summary_from_csv(path, stop_distance, chunk_rows=None):
     seen = moved_seen = 0
     last_source = None
     for robot, source in chunks():
-        path_parts.append(source[(-seen) % path_every::path_every])
+        path_parts.append(source[(-seen) % path_every::path_every].copy())
         moved = np.hypot(*(robot - start).T) > _MOVED
         on_path = robot[moved]
-        robot_parts.append(on_path[(-moved_seen) % robot_every::robot_every])
+        robot_parts.append(on_path[(-moved_seen) % robot_every::robot_every].copy())
         seen += len(robot)
         moved_seen += len(on_path)
         last_source = source[-1:].copy()

@@ -338,9 +338,11 @@ def _non_finite_metrics(summary, error):
     return error
 
 
-# Plots read results.csv thinned to this many rows: a line of 20,000 points is finer than
-# the figure's pixels, and the memory a plot takes no longer grows with the run.
-_PLOT_ROWS = 20000
+# Plots read results.csv thinned to at most this many rows (every k-th row plus the last):
+# about two points per pixel of a figure, so a plot's memory no longer grows with the run
+# (Agg's memory grows with the vertices of a dense line: 4,500 rows cost ~27 MB more peak
+# RSS than 1,500). A default 30 s run (1,501 rows) is drawn from every row.
+_PLOT_ROWS = 2000
 
 
 class _Stop(Exception):

@@ -109,10 +109,13 @@ def test_killed_runs_never_pass_for_finished(fmu_dir, tmp_path):
         if existing:
             subprocess.run(["cp", "-a", str(finished), str(out)], check=True)
         old = _files(out) if existing else {}
-        delay = rng.uniform(0.3, 1.1) * duration
+        delay = rng.uniform(0.2, 1.0) * duration
         process = _start(scenario, out, fmu_dir)
+        started = time.monotonic()
         try:
             process.wait(timeout=delay)
+            # finished before its kill: the machine got faster; aim the next kills earlier
+            duration = min(duration, time.monotonic() - started)
         except subprocess.TimeoutExpired:
             process.send_signal(signal.SIGKILL)
             process.wait(timeout=60)
@@ -120,7 +123,7 @@ def test_killed_runs_never_pass_for_finished(fmu_dir, tmp_path):
         outcomes.append(_check_after_kill(out, process.returncode, old) if out.exists()
                         else False)
     # most kills land before the end: the checks above ran on killed runs, not finished ones
-    assert outcomes.count(False) >= 4, outcomes
+    assert outcomes.count(False) >= 3, outcomes
 
 
 def _wait_for_rows(out, rows, process, timeout=120):
