@@ -80,7 +80,12 @@ def _string_parameters(system, scenario):
                     and isinstance(variable.start, str)):
                 yield f"{component.name}.{variable.name}", variable.start
     for key, value in system.parameter_values.items():
-        value = value.value if hasattr(value, "value") else value
+        # as the run will use it: a file named in an .ssd or .ssv may be resolved from that
+        # file's folder (run_value), else it is the value as written
+        if hasattr(value, "run_value"):
+            value = value.run_value()
+        elif hasattr(value, "value"):
+            value = value.value
         if isinstance(value, str):
             yield key, value
     for key, value in scenario.parameters.items():

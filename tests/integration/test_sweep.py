@@ -112,9 +112,9 @@ def test_a_failed_run_is_a_row_and_the_sweep_goes_on(fmu_dir, tmp_path):
     by_path = {row["source.path"]: row for row in result.rows}
     assert by_path["static"]["status"] == "ok"
     assert by_path[str(broken)]["status"] == "failed"
-    # the row names the instance that refused (the model's own line, naming the CSV row,
-    # reaches it once the FMU logging is per instance: issue 11, point 1)
-    assert "instance source" in by_path[str(broken)]["error"]
+    # the row keeps the model's own reason: the instance, the file, the line and the value
+    error = by_path[str(broken)]["error"]
+    assert "instance source" in error and f"{broken}, line 3: '0,banana'" in error
     assert (result.computed, result.failed) == (2, 1)
     table = json.loads(result.table_json.read_text())
     assert [row["status"] for row in table] == [row["status"] for row in result.rows]
