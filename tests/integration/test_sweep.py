@@ -258,3 +258,39 @@ def _scheduler_address(scheduler_file, process, timeout):
         except (FileNotFoundError, json.JSONDecodeError, KeyError):
             time.sleep(0.2)
     raise AssertionError(f"dask scheduler wrote no address to {scheduler_file} in {timeout} s")
+
+
+def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
+    import signal
+
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "orchestrator.cli", "sweep", "scenarios/static_case1.toml",
+               "--seeds", "1..4", "--workers", "1", "--out", str(out), "--fmu-dir",
+               str(fmu_dir), "--quiet"]
+    process = subprocess.Popen(command, cwd=REPO_ROOT, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 240
+        finished = []
+        while not finished and time.monotonic() < deadline and process.poll() is None:
+            time.sleep(0.1)
+            try:
+                finished = json.loads((out / "sweep.json").read_text())
+            except (OSError, ValueError):  # not written yet (never half-written: asserted below)
+                finished = []
+        assert process.poll() is None, "the sweep ended before it could be killed"
+        os.killpg(process.pid, signal.SIGKILL)  # the sweep and its worker process
+        process.wait(timeout=30)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait(timeout=30)
+    kept = json.loads((out / "sweep.json").read_text())  # whole, though killed
+    assert 1 <= len(kept) < 4 and all(row["status"] == "ok" for row in kept)
+    resumed = sweep(load_scenario(REPO_ROOT / "scenarios" / "static_case1.toml"), {}, out,
+                    seeds=[1, 2, 3, 4], fmu_dir=fmu_dir, workers=1, progress=False)
+    assert resumed.reused >= len(kept) and resumed.computed == 4 - resumed.reused
+    assert [row["status"] for row in resumed.rows] == ["ok"] * 4
+    by_seed = {row["seed"]: row for row in resumed.rows}
+    for row in kept:
+        assert _figures(by_seed[row["seed"]]) == _figures(row)
