@@ -1,9 +1,9 @@
 """Child of benchmarks/cosim_speed.py: one whole ``sonotrack run`` command, its phases timed.
 
 Run as ``python _run_phases.py TIMES_JSON [sonotrack run arguments...]``. Wraps the library
-functions that bound each phase (nothing in sonotrack is changed) and writes wall-clock
-timestamps (``time.time()``, comparable with the parent's) to TIMES_JSON just before the
-interpreter exits. Not a benchmark by itself (``make benchmarks`` skips files starting
+functions that bound each phase (nothing in sonotrack is changed), writes wall-clock
+timestamps (``time.time()``, comparable with the parent's) to TIMES_JSON when the command's
+``main`` returns, and ends as the ``sonotrack`` console script does. Not a benchmark by itself (``make benchmarks`` skips files starting
 with ``_``).
 """
 
@@ -43,11 +43,18 @@ def main():
     _wrap(master.Master, "run", before="stepping_started", after="stepping_done")
     # the last summary write is the final one (status ok): the summary is on disk
     _wrap(outputs.RunFolder, "write_summary", after="summary_written")
-    status = cli.main(argv)
-    marks["main_returned"] = time.time()
-    with open(times_path, "w") as stream:
-        json.dump(marks, stream)
-    return status
+    original_main = cli.main
+
+    def main_then_save(arguments):
+        status = original_main(arguments)
+        marks["main_returned"] = time.time()
+        with open(times_path, "w") as stream:
+            json.dump(marks, stream)
+        return status
+
+    cli.main = main_then_save
+    sys.argv = ["sonotrack"] + argv
+    return cli.console_main()  # as the console script ends (a fast exit after `run`)
 
 
 if __name__ == "__main__":

@@ -272,8 +272,15 @@ def main(argv=None):
     def command_record(runs):
         walls = [wall for wall, _ in runs]
         shares = {p: median([phases[p] / wall for wall, phases in runs]) for p in PHASES}
+            # the critical path: until summary.json is on disk (plots come after it)
+        to_summary = [sum(phases[p] for p in ("start-up", "set-up", "stepping", "summary"))
+                      for _, phases in runs]
         return {
             "wall_s": median(walls),
+            "to_summary_on_disk_s": median(to_summary),
+            "not_stepping_share_to_summary": median([1 - phases["stepping"] / total for
+                                                     (_, phases), total in zip(runs,
+                                                                               to_summary)]),
             "wall_runs_s": walls,
             "phases_s": {p: median([phases[p] for _, phases in runs]) for p in PHASES},
             "phase_shares": shares,

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from components.common.errors import SimulationError, SonotrackError
 
-__all__ = ["main"]
+__all__ = ["console_main", "main"]
 
 
 def _cmd_build(args):
@@ -257,5 +257,22 @@ def main(argv=None):
         return 3
 
 
+def console_main():
+    """The ``sonotrack`` console script: :func:`main`, then, after ``run``, a fast exit.
+
+    Everything ``run`` writes is closed, fsync'ed or renamed into place before :func:`main`
+    returns; what is left is the interpreter tearing down every module it imported (about
+    7 % of a default run's wall time), which no file needs, so the process ends there.
+    Called from Python, :func:`main` returns as usual.
+    """
+    argv = sys.argv[1:]
+    status = main(argv)
+    if _command_named(argv) == "run":
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console_main())

@@ -126,12 +126,18 @@ class LocalEngine:
                 raise
 
     def _drop_pool(self):
+        """Stop the workers now (after Ctrl-C or a broken pool).
+
+        SIGKILL, not SIGTERM: a run stopped half-way is not finished whatever its summary
+        says (the sweep runs it again), and a kill cannot race the run's own signal handlers
+        into a traceback on the terminal.
+        """
         pool, self._pool = self._pool, None
         if pool is None:
             return
         for process in list(getattr(pool, "_processes", {}).values()):
             if process.is_alive():
-                process.terminate()
+                process.kill()
         pool.shutdown(wait=True, cancel_futures=True)
 
     def close(self):
