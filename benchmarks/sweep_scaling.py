@@ -100,11 +100,14 @@ def start_cluster(work):
                                   **common)]
     try:
         deadline = time.monotonic() + 60
-        while not scheduler_file.is_file():
+        address = None
+        while address is None:
             if processes[0].poll() is not None or time.monotonic() > deadline:
                 raise RuntimeError("dask scheduler did not start")
-            time.sleep(0.1)
-        address = json.loads(scheduler_file.read_text())["address"]
+            try:  # the scheduler does not write its file atomically: wait for whole JSON
+                address = json.loads(scheduler_file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
         for _ in range(2):
             processes.append(subprocess.Popen(
                 [_dask(), "worker", address, "--nthreads", "1", "--no-dashboard",
