@@ -119,8 +119,10 @@ def _cmd_sweep(args):
         grid[key] = values
     seeds = parse_seeds(args.seeds) if args.seeds is not None else None
     out = Path(args.out) if args.out else Path("runs") / f"sweep_{Path(scenario_path).stem}"
-    result = sweep(load_scenario(scenario_path), grid, out, seeds=seeds, fmu_dir=args.fmu_dir,
-                   scheduler=args.scheduler, workers=_workers(args.workers), progress=not args.quiet)
+    result = sweep(load_scenario(scenario_path, allow_outside=args.allow_outside), grid, out,
+                   seeds=seeds, fmu_dir=args.fmu_dir, scheduler=args.scheduler,
+                   workers=_workers(args.workers), progress=not args.quiet,
+                   allow_outside=args.allow_outside)
     failed = [row for row in result.rows if row.get("status") != "ok"]
     print(f"{len(result.rows)} runs ({result.computed} computed, {result.reused} reused), "
           f"{len(failed)} failed")
@@ -196,6 +198,9 @@ def _parser(command=None):
                             "machine)")
     sweep.add_argument("--workers",
                        help="worker processes on this machine, >= 1 (default: CPUs)")
+    sweep.add_argument("--allow-outside", action="store_true",
+                       help="let the scenario and system files name files outside their "
+                            "folders")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
 

@@ -142,7 +142,20 @@ def _check_names(system, grid):
     return problems
 
 
-def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None):
+def _absolute_files(overrides):
+    """File-valued overrides (a waypoint CSV) as absolute paths, from the working folder.
+
+    A ``--set`` value is typed on the command line, so a relative file name means one in the
+    folder the command runs in; made absolute here, it names the same file for every worker,
+    whatever their working folder (the table keeps the value as given).
+    """
+    from orchestrator.paths import names_a_file
+
+    return {key: str(Path(value).resolve()) if names_a_file(value) else value
+            for key, value in overrides.items()}
+
+
+def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_outside=False):
     """Expand, check and key the runs of a sweep.
 
     Parameters
@@ -159,6 +172,8 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None):
         Folder of the FMUs, if not beside the ``.ssd``.
     system : orchestrator.system.System, optional
         The base scenario's system, if already loaded.
+    allow_outside : bool
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
 
     Returns
     -------
@@ -176,7 +191,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None):
 
     seeds = list(seeds) if seeds else [base.seed]
     if system is None:
-        system = load_system(base.system, fmu_dir=fmu_dir)
+        system = load_system(base.system, fmu_dir=fmu_dir, allow_outside=allow_outside)
     problems = _check_names(system, grid)
     if problems:
         raise ConfigError("; ".join(problems))
@@ -184,7 +199,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None):
     planned, keys, cache = [], set(), {}
     for overrides, seed in expand_grid(grid, seeds):
         try:
-            scenario = base.with_overrides(parameters=overrides, seed=seed)
+            scenario = base.with_overrides(parameters=_absolute_files(overrides), seed=seed)
             instance_parameters(system, scenario)
         except ConfigError as exc:
             problems.append(str(exc))
@@ -203,7 +218,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None):
     return planned
 
 
-def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None):
+def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outside=False):
     """Check and key a list of scenarios (e.g. Monte Carlo draws) as runs of one sweep.
 
     Parameters
@@ -216,6 +231,8 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None):
         What names each run in the table (default: ``{"scenario": name, "seed": seed}``).
     fmu_dir : path-like, optional
         Folder of the FMUs, if not beside the ``.ssd``.
+    allow_outside : bool
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
 
     Returns
     -------
@@ -241,7 +258,8 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None):
     systems, cache, problems, planned, keys = {}, {}, [], [], set()
     for scenario, named in zip(scenarios, settings):
         if scenario.system not in systems:
-            systems[scenario.system] = load_system(scenario.system, fmu_dir=fmu_dir)
+            systems[scenario.system] = load_system(scenario.system, fmu_dir=fmu_dir,
+                                                   allow_outside=allow_outside)
         system = systems[scenario.system]
         try:
             instance_parameters(system, scenario)

@@ -93,7 +93,7 @@ class _Table:
 
 
 def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
-             record_interval, label):
+             record_interval, label, allow_outside):
     from orchestrator.sweep.store import finished_summary
     from orchestrator.sweep.worker import RunTask, run_task
 
@@ -136,7 +136,8 @@ def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, pr
 
         tasks = [(run.key, RunTask(run.scenario, str(run.run_dir), run.key, fmu_dir,
                                    {k[4:]: v for k, v in run.digests.items()
-                                    if k.startswith("fmu:")}, record_interval))
+                                    if k.startswith("fmu:")}, record_interval,
+                                   allow_outside))
                  for run in pending]
         try:
             engine.run(run_task, tasks, on_result)
@@ -159,7 +160,7 @@ def _bar(total, initial, label):
 
 
 def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers=None,
-          progress=True, engine=None, record_interval=0.02):
+          progress=True, engine=None, record_interval=0.02, allow_outside=False):
     """Run ``base`` over a parameter grid and seeds, resuming from finished runs.
 
     Parameters
@@ -185,6 +186,8 @@ def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers
         ``scheduler`` and ``workers``.
     record_interval : float
         Simulated seconds between recorded rows of each run.
+    allow_outside : bool
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
 
     Returns
     -------
@@ -206,13 +209,14 @@ def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers
     """
     from orchestrator.sweep.plan import plan_runs
 
-    planned = plan_runs(base, grid, out_dir, seeds=seeds, fmu_dir=fmu_dir)
+    planned = plan_runs(base, grid, out_dir, seeds=seeds, fmu_dir=fmu_dir,
+                        allow_outside=allow_outside)
     return _execute(planned, out_dir, sorted(grid), fmu_dir, engine, scheduler, workers,
-                    progress, record_interval, label="sweep")
+                    progress, record_interval, "sweep", allow_outside)
 
 
 def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, workers=None,
-             progress=True, engine=None, record_interval=0.02):
+             progress=True, engine=None, record_interval=0.02, allow_outside=False):
     """Run a list of scenarios (e.g. Monte Carlo draws) as one resumable sweep.
 
     Parameters
@@ -223,7 +227,7 @@ def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, wo
         Folder of the sweep (``runs/<key>/`` per run, ``sweep.csv``, ``sweep.json``).
     settings : list of dict, optional
         What names each run in the table, one dict per scenario (default: its name and seed).
-    fmu_dir, scheduler, workers, progress, engine, record_interval
+    fmu_dir, scheduler, workers, progress, engine, record_interval, allow_outside
         As for :func:`sweep`.
 
     Returns
@@ -239,7 +243,8 @@ def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, wo
     """
     from orchestrator.sweep.plan import plan_scenarios
 
-    planned = plan_scenarios(scenarios, out_dir, settings=settings, fmu_dir=fmu_dir)
+    planned = plan_scenarios(scenarios, out_dir, settings=settings, fmu_dir=fmu_dir,
+                             allow_outside=allow_outside)
     keys = list(dict.fromkeys(k for run in planned for k in run.settings))
     return _execute(planned, out_dir, keys, fmu_dir, engine, scheduler, workers, progress,
-                    record_interval, label="runs")
+                    record_interval, "runs", allow_outside)

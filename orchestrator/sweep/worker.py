@@ -43,6 +43,8 @@ class RunTask:
         Instance name to the SHA-256 of its FMU, as the sweep hashed it.
     record_interval : float
         Simulated seconds between recorded rows.
+    allow_outside : bool
+        Let the ``.ssd`` name files outside its folder.
     """
 
     scenario: object
@@ -51,6 +53,7 @@ class RunTask:
     fmu_dir: str | None = None
     fmu_digests: dict = field(default_factory=dict)
     record_interval: float = 0.02
+    allow_outside: bool = False
 
 
 class WarmInstances:
@@ -82,16 +85,17 @@ class WarmInstances:
             self._digests[path] = cached
         return cached[1]
 
-    def system(self, ssd_path, fmu_dir):
+    def system(self, ssd_path, fmu_dir, allow_outside=False):
         """The loaded system of an ``.ssd`` (kept while the ``.ssd`` file is unchanged)."""
         from orchestrator.system import load_system
 
-        key = (str(ssd_path), str(fmu_dir))
+        key = (str(ssd_path), str(fmu_dir), bool(allow_outside))
         signature = self.file_digest(ssd_path)
         with self._lock:
             cached = self._systems.get(key)
         if cached is None or cached[0] != signature:
-            cached = (signature, load_system(ssd_path, fmu_dir=fmu_dir))
+            cached = (signature, load_system(ssd_path, fmu_dir=fmu_dir,
+                                             allow_outside=allow_outside))
             with self._lock:
                 self._systems[key] = cached
         return cached[1]
@@ -191,7 +195,7 @@ def _run(task, warm):
     from orchestrator.run import run_scenario
 
     scenario = task.scenario
-    system = warm.system(scenario.system, task.fmu_dir)
+    system = warm.system(scenario.system, task.fmu_dir, task.allow_outside)
     used = {}
     for component in system.components:
         expected = task.fmu_digests.get(component.name)
@@ -215,7 +219,8 @@ def _run(task, warm):
     try:
         result = run_scenario(scenario, run_dir, progress=False, fmu_dir=task.fmu_dir,
                               plots=False, record_interval=task.record_interval,
-                              system=system, handles=handle, sync_summary=False)
+                              system=system, handles=handle, sync_summary=False,
+                              allow_outside=task.allow_outside)
     except BaseException:
         for *_, instance in taken:
             _release(instance)

@@ -294,3 +294,19 @@ def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
     by_seed = {row["seed"]: row for row in resumed.rows}
     for row in kept:
         assert _figures(by_seed[row["seed"]]) == _figures(row)
+
+
+def test_a_relative_csv_in_set_names_the_file_in_the_working_folder(fmu_dir, tmp_path,
+                                                                    monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _write_waypoints(tmp_path / "wp.csv", [(0.0, 1.0), (0.0, 3.0)])
+    [run] = plan_runs(_short(), {"source.path": ["wp.csv"]}, tmp_path / "out",
+                      fmu_dir=fmu_dir)
+    assert run.settings["source.path"] == "wp.csv"  # the table shows what was typed
+    assert run.scenario.parameters["source.path"] == str(tmp_path / "wp.csv")
+    assert any(label.startswith("data:source.path@") for label in run.digests)
+    before = run.key
+    _write_waypoints(tmp_path / "wp.csv", [(1.0, 1.0), (1.0, 3.0)])
+    [run] = plan_runs(_short(), {"source.path": ["wp.csv"]}, tmp_path / "out",
+                      fmu_dir=fmu_dir)
+    assert run.key != before
