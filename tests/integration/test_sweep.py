@@ -264,8 +264,14 @@ def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
     import signal
 
     out = tmp_path / "sweep"
-    command = [sys.executable, "-m", "orchestrator.cli", "sweep", "scenarios/static_case1.toml",
-               "--seeds", "1..4", "--workers", "1", "--out", str(out), "--fmu-dir",
+    scenario = tmp_path / "short.toml"  # 8 runs of 3 s: the sweep is still going after one
+    text = (REPO_ROOT / "scenarios" / "static_case1.toml").read_text(encoding="utf-8")
+    assert "stop_time = 12.0" in text
+    scenario.write_text(text.replace("stop_time = 12.0", 'stop_time = 3.0\nsystem = '
+                                     '"SystemStructure.ssd"'), encoding="utf-8")
+    shutil.copy(REPO_ROOT / "fmus" / "SystemStructure.ssd", tmp_path / "SystemStructure.ssd")
+    command = [sys.executable, "-m", "orchestrator.cli", "sweep", str(scenario),
+               "--seeds", "1..8", "--workers", "1", "--out", str(out), "--fmu-dir",
                str(fmu_dir), "--quiet"]
     process = subprocess.Popen(command, cwd=REPO_ROOT, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL, start_new_session=True)
@@ -286,11 +292,11 @@ def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
             os.killpg(process.pid, signal.SIGKILL)
             process.wait(timeout=30)
     kept = json.loads((out / "sweep.json").read_text())  # whole, though killed
-    assert 1 <= len(kept) < 4 and all(row["status"] == "ok" for row in kept)
-    resumed = sweep(load_scenario(REPO_ROOT / "scenarios" / "static_case1.toml"), {}, out,
-                    seeds=[1, 2, 3, 4], fmu_dir=fmu_dir, workers=1, progress=False)
-    assert resumed.reused >= len(kept) and resumed.computed == 4 - resumed.reused
-    assert [row["status"] for row in resumed.rows] == ["ok"] * 4
+    assert 1 <= len(kept) < 8 and all(row["status"] == "ok" for row in kept)
+    resumed = sweep(load_scenario(scenario), {}, out, seeds=range(1, 9), fmu_dir=fmu_dir,
+                    workers=1, progress=False)
+    assert resumed.reused >= len(kept) and resumed.computed == 8 - resumed.reused
+    assert [row["status"] for row in resumed.rows] == ["ok"] * 8
     by_seed = {row["seed"]: row for row in resumed.rows}
     for row in kept:
         assert _figures(by_seed[row["seed"]]) == _figures(row)
