@@ -89,7 +89,7 @@ def _check_after_kill(out, returncode, old):
 
 def test_killed_runs_never_pass_for_finished(fmu_dir, tmp_path):
     """SIGKILL at random moments, into fresh folders and into a folder holding an older
-    finished run (its summary ok and its PNGs present), four times each."""
+    finished run (its summary ok and its PNGs present), at least four times each."""
     scenario = _scenario(tmp_path)
     finished = tmp_path / "finished"
     started = time.monotonic()
@@ -103,7 +103,11 @@ def test_killed_runs_never_pass_for_finished(fmu_dir, tmp_path):
 
     rng = random.Random(20261201)
     outcomes = []
-    for attempt in range(8):
+    # At least eight kills; more (up to 16) while fewer than four landed before the end: a
+    # run can be faster than the first, timed one when the machine's load just dropped.
+    for attempt in range(16):
+        if attempt >= 8 and outcomes.count(False) >= 4:
+            break
         existing = attempt % 2 == 1
         out = tmp_path / f"run{attempt}"
         if existing:
