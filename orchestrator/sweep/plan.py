@@ -211,10 +211,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
         keys.add(key)
         planned.append(PlannedRun({**overrides, "seed": seed}, scenario, key,
                                   out_dir / "runs" / key, digests))
-    if problems:
-        unique = list(dict.fromkeys(problems))
-        raise ConfigError(unique[0] if len(unique) == 1 else
-                          f"{len(unique)} problems:\n" + "\n".join(f"  {p}" for p in unique))
+    _raise_problems(problems)
     return planned
 
 
@@ -272,8 +269,13 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
             keys.add(key)
             planned.append(PlannedRun(dict(named), scenario, key, out_dir / "runs" / key,
                                       digests))
+    _raise_problems(problems)
+    return planned
+
+
+def _raise_problems(problems):
+    """Raise one ConfigError listing each distinct problem once (one line for a single one)."""
     if problems:
         unique = list(dict.fromkeys(problems))
         raise ConfigError(unique[0] if len(unique) == 1 else
                           f"{len(unique)} problems:\n" + "\n".join(f"  {p}" for p in unique))
-    return planned
