@@ -277,6 +277,21 @@ class WheelLoopModel:
         per_kp = np.polysub(self.characteristic_polynomial(1.0, kd, ki), base)
         return base, per_kp
 
+    def characteristic_in_gain_factor(self, kp, kd, ki=0.0):
+        """``(base, per_gain)`` with characteristic polynomial ``base + G * per_gain``.
+
+        ``G`` is the plant's DC-gain factor relative to RobotPlant's (absolute, not relative
+        to this model's :attr:`gain_factor`). The factor multiplies the voltage the motor
+        receives, so it scales the plant's numerator and nothing else: ``Dc Dm + G Nc Nm1``
+        with ``Nm1`` the measured-speed numerator at ``G = 1``.
+        """
+        nc, dc = self.controller_poly(kp, kd, ki)
+        base = np.polymul(dc, self.meas_den)
+        per_gain = np.polymul(nc, self.meas_num) / self.gain_factor
+        length = max(base.size, per_gain.size)
+        return (np.pad(base, (length - base.size, 0)),
+                np.pad(per_gain, (length - per_gain.size, 0)))
+
     def characteristic_in_kd(self, kp, ki=0.0):
         """``(base, per_kd)`` with characteristic polynomial ``base + kd * per_kd``."""
         base = self.characteristic_polynomial(kp, 0.0, ki)

@@ -16,14 +16,18 @@ from components.control.inference import FuzzyGainScheduler
 
 from .analysis import analyse_gains, controller_cross_check, incremental_form, kp_edge, \
     routh_bounds, stability_boundary
-from .robustness import plant_grid, robustness_point
+from .robustness import largest_stable_gain_factor, plant_grid, robustness_point
 
 __all__ = ["gain_surface", "reachable_gains", "surface_distances", "paper_box",
-           "pid_baseline", "robustness", "routh_finding", "core_cross_check", "pd_forms",
-           "PAPER_BOX_SIGNED"]
+           "pid_baseline", "robustness", "gain_factor_edges", "gain_sets", "routh_finding",
+           "core_cross_check", "pd_forms", "PAPER_BOX_SIGNED", "FINE_TIME_CONSTANT_FACTORS"]
 
 # The paper's printed ranges on its own error convention (y - r): Sec. 4.1.
 PAPER_BOX_SIGNED = {"Kp": (-4.0, -3.0), "Kd": (-2.0, -0.3)}
+
+# Time-constant factors of the largest-stable-gain-factor figure: x0.5..x2 in steps of
+# 2^(1/6) (12 %), exact powers of two so that 0.5, 1 and 2 are on it.
+FINE_TIME_CONSTANT_FACTORS = tuple(float(2.0 ** (k / 6)) for k in range(-6, 7))
 
 
 def _trim(settings):
@@ -134,22 +138,56 @@ def pid_baseline(model, settings):
     return result
 
 
-def robustness(model, settings, gain_factors, time_constant_factors,
-               controllers=("fgs_pd", "pd", "pid")):
-    """FGS-PD (surface corners), fixed PD and PID on every plant variant of the grid."""
+def gain_sets(settings):
+    """The frozen gain sets of each controller: FGS-PD surface corners, fixed PD, PID.
+
+    Returns
+    -------
+    dict
+        ``fgs_pd`` / ``pd`` / ``pid`` -> list of ``(kp, kd, ki)``; FGS-PD and PD carry the
+        integral trim.
+    """
     ki = _trim(settings)
-    corners = [(kp, kd, ki) for kp in (settings["kp_min"], settings["kp_max"])
-               for kd in (settings["kd_min"], settings["kd_max"])]
-    gain_sets = {
-        "fgs_pd": corners,
+    return {
+        "fgs_pd": [(settings["kp_min"], settings["kd_min"], ki),
+                   (settings["kp_min"], settings["kd_max"], ki),
+                   (settings["kp_max"], settings["kd_min"], ki),
+                   (settings["kp_max"], settings["kd_max"], ki)],
         "pd": [(settings["pd_kp"], settings["pd_kd"], ki)],
         "pid": [(settings["pid_kp"], settings["pid_kd"], settings["pid_ki"])],
     }
+
+
+def robustness(model, settings, gain_factors, time_constant_factors,
+               controllers=("fgs_pd", "pd", "pid")):
+    """FGS-PD (surface corners), fixed PD and PID on every plant variant of the grid."""
+    sets = gain_sets(settings)
     variants = plant_grid(gain_factors, time_constant_factors)
-    return {"trim_ki": ki, "gain_factors": list(map(float, gain_factors)),
+    return {"trim_ki": _trim(settings), "gain_factors": list(map(float, gain_factors)),
             "time_constant_factors": list(map(float, time_constant_factors)),
-            "points": {name: [asdict(robustness_point(model, v, name, gain_sets[name]))
+            "points": {name: [asdict(robustness_point(model, v, name, sets[name]))
                               for v in variants] for name in controllers}}
+
+
+def gain_factor_edges(model, settings, time_constant_factors=FINE_TIME_CONSTANT_FACTORS,
+                      controllers=("fgs_pd", "pd", "pid")):
+    """Largest stable plant-DC-gain factor of every frozen gain set at each time constant.
+
+    Returns
+    -------
+    dict
+        ``time_constant_factors`` and ``sets``: per gain set its ``controller``, ``kp``,
+        ``kd``, ``ki`` and ``edges`` (one :func:`.robustness.largest_stable_gain_factor`
+        dict per time-constant factor).
+    """
+    sets = gain_sets(settings)
+    out = []
+    for name in controllers:
+        for kp, kd, ki in sets[name]:
+            out.append({"controller": name, "kp": float(kp), "kd": float(kd), "ki": float(ki),
+                        "edges": [largest_stable_gain_factor(model, kp, kd, ki, tau)
+                                  for tau in time_constant_factors]})
+    return {"time_constant_factors": [float(t) for t in time_constant_factors], "sets": out}
 
 
 def routh_finding(model, settings):

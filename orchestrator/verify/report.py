@@ -29,7 +29,8 @@ from .fmu_runs import (
 )
 from .loop_model import WheelLoopModel
 
-__all__ = ["VerificationReport", "verify", "DEFAULT_OUT_DIR", "model_statement"]
+__all__ = ["VerificationReport", "verify", "DEFAULT_OUT_DIR", "model_statement",
+           "robustness_grid"]
 
 DEFAULT_OUT_DIR = "runs/verify"
 
@@ -144,6 +145,20 @@ def _model_figures(model, plant):
     }
 
 
+def robustness_grid(req):
+    """The plant grid evaluated: every factor the requirement and the x4 finding name.
+
+    Returns
+    -------
+    (list of float, list of float)
+        Gain factors and time-constant factors, sorted.
+    """
+    tables = (req["robust_stability"], req["robust_stability_x4"])
+    gains = sorted({float(g) for t in tables for g in t["gain_factors"]})
+    taus = sorted({float(x) for t in tables for x in t["time_constant_factors"]})
+    return gains, taus
+
+
 def _judge(f, settings, req):
     surface = f["surface"]
     out = [
@@ -169,7 +184,10 @@ def _judge(f, settings, req):
     out.append(C.check_paper_gain_box(f["paper_box"], req["paper_gain_box"]))
     for name in ("fgs_pd", "pd", "pid"):
         points = f["robustness"]["points"][name]
-        out.append(C.check_robust_stability(points, name, req["robust_stability"]))
+        out.append(C.check_robust_stability(points, f["gain_factor_edges"], name,
+                                            req["robust_stability"]))
+        out.append(C.check_robust_stability_beyond(points, f["gain_factor_edges"], name,
+                                                   req["robust_stability_x4"]))
         out.append(C.check_robust_steady_state(points, name, req["robust_steady_state"]))
     out.append(C.check_routh_gives_paper_bounds(f["routh_finding"], settings,
                                                 req["routh_gives_paper_bounds"]))
@@ -234,13 +252,13 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
     f["paper_box"] = measure.paper_box(model, settings["trim_ki"])
     f["pid"] = measure.pid_baseline(model, settings)
     f["core_cross_check"] = measure.core_cross_check(model, settings)
-    robust = req["robust_stability"]
-    f["robustness"] = measure.robustness(model, settings, robust["gain_factors"],
-                                         robust["time_constant_factors"])
+    gains, taus = robustness_grid(req)
+    f["robustness"] = measure.robustness(model, settings, gains, taus)
+    f["gain_factor_edges"] = measure.gain_factor_edges(
+        model, settings, sorted(set(measure.FINE_TIME_CONSTANT_FACTORS) | set(taus)))
     pure = dict(settings, trim_ki=0.0)
     f["robustness_pure_pd"] = measure.robustness(
-        model, pure, robust["gain_factors"], robust["time_constant_factors"],
-        controllers=("fgs_pd",))["points"]["fgs_pd"]
+        model, pure, gains, taus, controllers=("fgs_pd",))["points"]["fgs_pd"]
     f["routh_finding"] = measure.routh_finding(model, settings)
     f["pd_forms"] = measure.pd_forms(model, settings)
     if extra_delay == 0:

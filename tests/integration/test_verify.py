@@ -41,6 +41,7 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     for required in ("routh_vs_roots", "surface_stable", "gain_margin", "phase_margin",
                      "step_response", "pid_baseline", "plant_fmu_vs_tf", "controller_fmu_vs_law",
                      "closed_loop_fmus_vs_tf", "paper_gain_box", "robust_stability_fgs_pd",
+                     "robust_stability_x4_fgs_pd", "robust_stability_x4_pid",
                      "robust_steady_state_pd", "robust_steady_state_pid",
                      "routh_gives_paper_bounds"):
         assert required in names, required

@@ -13,7 +13,7 @@ import pytest
 
 from components.control import DEFAULTS
 from components.plant import PlantParameters
-from orchestrator.verify import WheelLoopModel, controller_cross_check, load_requirements
+from orchestrator.verify import WheelLoopModel, controller_cross_check, load_requirements, verify
 from orchestrator.verify import checks as C
 from orchestrator.verify import measure
 from orchestrator.verify.report import _model_figures
@@ -113,20 +113,92 @@ def test_paper_box_is_stable_on_our_signs_and_a_box_past_the_edge_fails(model):
     assert not C.check_paper_gain_box(far, REQ["paper_gain_box"]).passed
 
 
-GRID = ([0.25, 1.0, 4.0], [0.5, 1.0, 2.0])
+GRID = ([0.25, 0.5, 1.0, 2.0, 4.0], [0.5, 1.0, 2.0])
 
 
-def test_robustness_with_the_trim_has_zero_steady_state_error(model):
-    r = measure.robustness(model, _settings(), *GRID)
+@pytest.fixture(scope="module")
+def robust(model):
+    settings = _settings()
+    return (measure.robustness(model, settings, *GRID),
+            measure.gain_factor_edges(model, settings, GRID[1]))
+
+
+def test_robust_stability_requirement_is_the_gain_margins_6_db():
+    # The two requirements state one margin: a plant-gain factor G is the controller scaled
+    # by G, so robust_stability may not ask more (or less) than gain_margin does.
+    assert max(REQ["robust_stability"]["gain_factors"]) == REQ["gain_margin"]["min_gain_margin"]
+    assert REQ["robust_stability_x4"]["severity"] == "finding"
+    assert REQ["robust_stability_x4"]["gain_factors"] == [4.0]
+
+
+def test_robustness_with_the_trim_has_zero_steady_state_error(robust):
+    r, _ = robust
     for name in ("fgs_pd", "pd", "pid"):
         check = C.check_robust_steady_state(r["points"][name], name, REQ["robust_steady_state"])
         assert check.passed, check.measured
         assert check.values["worst_fraction"] < 1e-6  # exactly 0 up to rounding (integral)
-    # The paper's gain box is not stable on a wheel 4x as strong and twice as fast: a finding
-    # about the gains, the same with or without the trim.
-    check = C.check_robust_stability(r["points"]["fgs_pd"], "fgs_pd", REQ["robust_stability"])
-    assert not check.passed and "gain x4, tau x0.5" in check.measured
-    assert C.check_robust_stability(r["points"]["pid"], "pid", REQ["robust_stability"]).passed
+
+
+def test_robust_stability_passes_to_x2_and_x4_is_a_finding_for_the_paper_box(robust):
+    r, edges = robust
+    for name in ("fgs_pd", "pd", "pid"):
+        check = C.check_robust_stability(r["points"][name], edges, name, REQ["robust_stability"])
+        assert check.passed, check.measured
+        assert check.values["points"] == 12 and check.values["at_time_constant_factor"] == 0.5
+    worst = C.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd",
+                                     REQ["robust_stability"]).values
+    assert 2.0 < worst["largest_stable_gain_factor"] < 4.0  # 2.61 at (kp 4, kd 2)
+    for name, radius in (("fgs_pd", "1.238"), ("pd", "1.064")):
+        finding = C.check_robust_stability_beyond(r["points"][name], edges, name,
+                                                  REQ["robust_stability_x4"])
+        assert not finding.passed and finding.verdict == "warning"
+        assert ("UNSTABLE on a wheel with 4x the DC gain and half the time constant; retune "
+                "for such a motor") in finding.measured
+        assert f"gain x4, tau x0.5: max|z| {radius}" in finding.measured
+        assert finding.values["largest_stable_gain_factor"]["0.5"] < 4.0
+    pid = C.check_robust_stability_beyond(r["points"]["pid"], edges, "pid",
+                                          REQ["robust_stability_x4"])
+    assert pid.passed and pid.values["largest_stable_gain_factor"]["0.5"] > 4.0
+
+
+def test_robust_stability_fails_for_a_gain_set_unstable_inside_x2(model):
+    # kd 5 on the fixed PD: stable on RobotPlant, stable only up to x1.6 at tau x0.5.
+    settings = _settings(pd_kd=5.0)
+    r = measure.robustness(model, settings, *GRID, controllers=("pd",))
+    edges = measure.gain_factor_edges(model, settings, GRID[1], controllers=("pd",))
+    check = C.check_robust_stability(r["points"]["pd"], edges, "pd", REQ["robust_stability"])
+    assert not check.passed and "gain x2, tau x0.5" in check.measured
+    assert check.values["largest_stable_gain_factor"] < 2.0
+
+
+def test_robust_stability_fails_when_the_requirement_asks_more_or_the_edge_is_short(robust):
+    r, edges = robust
+    # x3 is not on the evaluated grid: the exact edge (2.61 at tau x0.5) still catches it.
+    more = dict(REQ["robust_stability"], gain_factors=[0.25, 0.5, 1.0, 2.0, 3.0])
+    assert not C.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd", more).passed
+    assert C.check_robust_stability(r["points"]["pid"], edges, "pid", more).passed  # 4.10
+    # An edge below x2 between the grid's points fails although every grid point is stable.
+    short = copy.deepcopy(edges)
+    short["sets"][-1]["edges"][1]["upper"] = 1.9
+    assert not C.check_robust_stability(r["points"]["pid"], short, "pid",
+                                        REQ["robust_stability"]).passed
+
+
+def test_x4_finding_flips_for_a_stronger_pid_and_clears_when_the_controller_is_retuned(model):
+    strong = _settings(pid_kd=2.0)
+    r = measure.robustness(model, strong, [4.0], [0.5], controllers=("pid",))
+    edges = measure.gain_factor_edges(model, strong, [0.5], controllers=("pid",))
+    req = dict(REQ["robust_stability_x4"], time_constant_factors=[0.5])
+    assert not C.check_robust_stability_beyond(r["points"]["pid"], edges, "pid", req).passed
+    # Retuned for a motor with 4x the DC gain: volts_per_speed a quarter, the same loop again.
+    settings = _settings(volts_per_speed=DEFAULTS["volts_per_speed"] / 4)
+    retuned = WheelLoopModel(volts_per_speed=settings["volts_per_speed"])
+    r = measure.robustness(retuned, settings, [4.0], [0.5], controllers=("fgs_pd",))
+    edges = measure.gain_factor_edges(retuned, settings, [0.5], controllers=("fgs_pd",))
+    check = C.check_robust_stability_beyond(r["points"]["fgs_pd"], edges, "fgs_pd", req)
+    assert check.passed
+    assert check.values["largest_stable_gain_factor"]["0.5"] == pytest.approx(4 * 2.6117,
+                                                                              rel=1e-3)
 
 
 def test_robust_steady_state_flips_without_the_trim_and_matches_the_analytic_value(model):
@@ -145,9 +217,11 @@ def test_robust_steady_state_flips_without_the_trim_and_matches_the_analytic_val
 
 
 def test_robust_stability_flips_for_the_pid_with_gains_past_the_edge(model):
-    wild = measure.robustness(model, _settings(pid_kp=30.0), [1.0, 4.0], [1.0],
-                              controllers=("pid",))["points"]["pid"]
-    assert not C.check_robust_stability(wild, "pid", REQ["robust_stability"]).passed
+    wild = _settings(pid_kp=30.0)
+    r = measure.robustness(model, wild, [1.0, 2.0], [1.0], controllers=("pid",))
+    edges = measure.gain_factor_edges(model, wild, [1.0], controllers=("pid",))
+    req = dict(REQ["robust_stability"], time_constant_factors=[1.0])
+    assert not C.check_robust_stability(r["points"]["pid"], edges, "pid", req).passed
 
 
 def test_routh_finding_says_no_end_of_the_box_is_a_routh_bound(model):
@@ -179,11 +253,20 @@ def test_cli_exit_status_is_the_number_of_failed_checks(tmp_path, capsys):
     status = main(["verify", "--no-fmu", "--grid", "2", "--out", str(tmp_path)])
     data = json.loads((tmp_path / "verification.json").read_text())
     failed = [c["name"] for c in data["checks"] if c["verdict"] == "FAIL"]
-    assert status == len(failed) == data["summary"]["exit_status"]
-    assert set(failed) == {"robust_stability_fgs_pd", "robust_stability_pd"}
-    assert "FAIL" in capsys.readouterr().out
+    warnings = {c["name"] for c in data["checks"] if c["verdict"] == "warning"}
+    assert status == len(failed) == data["summary"]["exit_status"] == 0
+    assert warnings == {"robust_stability_x4_fgs_pd", "robust_stability_x4_pd",
+                        "routh_gives_paper_bounds"}
+    assert "warning robust_stability_x4_fgs_pd" in capsys.readouterr().out
     strict = main(["verify", "--no-fmu", "--grid", "2", "--strict", "--out", str(tmp_path)])
-    assert strict == len(failed) + 1  # + the Routh finding
+    assert strict == len(failed) + len(warnings)
+    # A requirement that fails counts once, and --strict adds the warnings.
+    broken = load_requirements()
+    broken["robust_stability"]["gain_factors"] = [0.25, 0.5, 1.0, 2.0, 4.0]
+    report = verify(tmp_path / "broken", grid_size=2, fmu=False, plots=False,
+                    requirements=broken)
+    assert report.exit_status() == 2  # robust_stability_fgs_pd and _pd
+    assert report.exit_status(strict=True) == 2 + len(warnings)
     assert json.loads((tmp_path / "verification.json").read_text())["summary"]["strict"]
 
 
