@@ -7,8 +7,10 @@ whichever runs it:
 - :class:`LocalEngine` (the default): Dask's local process scheduler
   (:func:`dask.multiprocessing.get`) over a pool of worker processes that this engine keeps
   for its whole life. The pool starts in milliseconds (its processes are forked from this
-  one; the sweep starts them before its progress bar starts a thread), and its workers keep
-  FMUs loaded and instances warm from one run, and one sweep, to the next.
+  one once Dask is imported; the sweep starts them before it plans, and before its progress
+  bar starts a thread). Each worker first warms up on a few steps of the sweep's first
+  scenario, while the sweep's process plans and hashes the runs, then keeps FMUs loaded and
+  instances warm from one run, and one sweep, to the next.
 - :class:`ClusterEngine`: a ``dask.distributed`` scheduler given by address (``dask
   scheduler`` / ``dask worker`` on any machines that see the same files) or an existing
   ``Client``; the workers keep their instances warm the same way.
@@ -35,10 +37,14 @@ def _check_workers(workers):
     return workers
 
 
-def _ignore_interrupts():
+def _start_worker(warm_up_tasks, scratch):
     # Ctrl-C belongs to the sweep's process, which stops the pool; a worker interrupted in the
     # middle of an FMU call would only turn it into an fmi2Fatal.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if warm_up_tasks:
+        from orchestrator.sweep.worker import warm_up
+
+        warm_up(warm_up_tasks, scratch)
 
 
 def _process_id():
@@ -76,18 +82,40 @@ class LocalEngine:
     def __init__(self, workers=None):
         self.workers = _check_workers(workers)
         self._pool = None
+        self._scratch = None  # the workers' warm-up folder, removed on close
+        self._ran = False
 
-    def start(self):
-        """Start the worker processes now (otherwise at the first run); return self."""
+    def start(self, warm_up=()):
+        """Start the worker processes now (otherwise at the first run); return self.
+
+        Returns once the processes are forked, without waiting for them: each one first runs
+        ``warm_up`` (a few :class:`~orchestrator.sweep.worker.RunTask`, see
+        :func:`~orchestrator.sweep.worker.warm_up`) in a scratch folder and then takes tasks,
+        so its first-run costs overlap whatever this process does meanwhile (planning,
+        hashing, dispatching). Dask is imported before the fork, so that the workers inherit
+        it. Ignored if already started.
+        """
         if self._pool is None:
+            import tempfile
             from concurrent.futures import ProcessPoolExecutor
 
+            import dask.multiprocessing  # noqa: F401  (for run(), and inherited by the workers)
+
+            warm_up = tuple(warm_up)
+            if warm_up:
+                self._scratch = tempfile.mkdtemp(prefix="sonotrack-warm-up-")
+            self._ran = False
             self._pool = ProcessPoolExecutor(self.workers, mp_context=_pool_context(),
-                                             initializer=_ignore_interrupts)
-            pings = [self._pool.submit(_process_id) for _ in range(self.workers)]
-            for ping in pings:
-                ping.result()
+                                             initializer=_start_worker,
+                                             initargs=(warm_up, self._scratch))
+            # with fork, the first submission forks every worker (before any thread starts)
+            self._pool.submit(_process_id)
         return self
+
+    @property
+    def started(self):
+        """Whether the worker processes are running."""
+        return self._pool is not None
 
     def run(self, function, tasks, on_result):
         """Run ``function(task)`` for each ``(key, task)``; ``on_result(key, result)`` as each ends.
@@ -109,6 +137,7 @@ class LocalEngine:
 
         while remaining:
             self.start()
+            self._ran = True
             graph = {key: (function, task) for key, task in remaining.items()}
             try:
                 get(graph, list(graph), pool=self._pool, chunksize=1,
@@ -139,15 +168,29 @@ class LocalEngine:
             if process.is_alive():
                 process.kill()
         pool.shutdown(wait=True, cancel_futures=True)
+        self._remove_scratch()
 
     def close(self):
-        """Stop the worker processes."""
+        """Stop the worker processes (at once if they never ran a task: they were only
+        warming up)."""
+        if not self._ran:
+            self._drop_pool()
+            return
         pool, self._pool = self._pool, None
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
+        self._remove_scratch()
+
+    def _remove_scratch(self):
+        scratch, self._scratch = self._scratch, None
+        if scratch is not None:
+            import shutil
+
+            shutil.rmtree(scratch, ignore_errors=True)
 
     def __enter__(self):
-        return self.start()
+        # started by the first sweep, so that the workers warm up on its first run
+        return self
 
     def __exit__(self, *exc):
         self.close()
@@ -204,8 +247,9 @@ class ClusterEngine:
                 from None
         self._own = True
 
-    def start(self):
-        """Nothing to start (the cluster runs already); return self."""
+    def start(self, warm_up=()):
+        """Nothing to start (the cluster runs already; its workers warm up in their first
+        task); return self."""
         return self
 
     def run(self, function, tasks, on_result):

@@ -215,7 +215,8 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
     return planned
 
 
-def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outside=False):
+def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outside=False,
+                   systems=None):
     """Check and key a list of scenarios (e.g. Monte Carlo draws) as runs of one sweep.
 
     Parameters
@@ -230,6 +231,9 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
         Folder of the FMUs, if not beside the ``.ssd``.
     allow_outside : bool
         Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
+    systems : dict, optional
+        ``.ssd`` path (as in ``scenario.system``) to its system, already loaded with the same
+        ``fmu_dir``.
 
     Returns
     -------
@@ -252,7 +256,7 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     if len(settings) != len(scenarios):
         raise ConfigError(f"{len(settings)} settings for {len(scenarios)} scenarios")
     out_dir = Path(out_dir).resolve()
-    systems, cache, problems, planned, keys = {}, {}, [], [], set()
+    systems, cache, problems, planned, keys = dict(systems or {}), {}, [], [], set()
     for scenario, named in zip(scenarios, settings):
         if scenario.system not in systems:
             systems[scenario.system] = load_system(scenario.system, fmu_dir=fmu_dir,

@@ -92,8 +92,44 @@ class _Table:
         self._spent = self._last - started
 
 
-def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
+def _execute(plan, first, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
              record_interval, label, allow_outside):
+    """Plan (``plan(system)``), reuse finished runs, run the rest on the engine, write the
+    table.
+
+    A local engine not yet started is started before planning: once this process has loaded
+    ``first``'s system and unpacked its FMUs (``system``, passed on to ``plan``), its workers
+    are forked and warm up on ``first`` cut to a few steps, while this process plans and
+    hashes the runs.
+    """
+    from orchestrator.sweep.engine import LocalEngine, open_engine
+    from orchestrator.sweep.worker import prepare
+
+    own = engine is None
+    if own and not scheduler:
+        engine = open_engine(None, workers)
+    fmu_dir = str(Path(fmu_dir).resolve()) if fmu_dir is not None else None
+    try:
+        system = None
+        if isinstance(engine, LocalEngine) and first is not None and not engine.started:
+            # the system loaded and the FMUs unpacked once, here, for the workers to inherit;
+            # then the workers: a local pool forks fastest from a process with one thread,
+            # and the progress bar starts a monitor thread
+            system = prepare(first.system, fmu_dir, allow_outside)
+            engine.start(warm_up=_warm_up_tasks(first, fmu_dir, record_interval,
+                                                allow_outside))
+        planned = plan(system)
+        if settings is None:
+            settings = list(dict.fromkeys(k for run in planned for k in run.settings))
+        return _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers,
+                            progress, record_interval, label, allow_outside)
+    finally:
+        if own and engine is not None:
+            engine.close()
+
+
+def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
+                 record_interval, label, allow_outside):
     from orchestrator.sweep.store import finished_summary
     from orchestrator.sweep.worker import RunTask, run_task
 
@@ -116,12 +152,8 @@ def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, pr
         if own:
             engine = open_engine(scheduler, workers)
         result.engine = engine.name
-        # workers first: a local pool forks fastest from a process with one thread, and the
-        # progress bar starts a monitor thread
-        engine.start()
         by_key = {run.key: run for run in pending}
         bar = _bar(len(planned), result.reused, label) if progress else None
-        fmu_dir = str(Path(fmu_dir).resolve()) if fmu_dir is not None else None
 
         def on_result(key, summary):
             row = _row(by_key[key], summary if isinstance(summary, dict) else
@@ -150,6 +182,27 @@ def _execute(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, pr
     result.rows = table.rows()
     result.table_csv, result.table_json = table.paths
     return result
+
+
+# A warm-up run lasts this many of the scenario's longest communication steps.
+_WARM_UP_STEPS = 5
+
+
+def _warm_up_tasks(scenario, fmu_dir, record_interval, allow_outside):
+    """The run a worker does once before its first task: ``scenario`` cut to a few steps."""
+    from components.common.errors import ConfigError
+    from orchestrator.sweep.worker import RunTask
+
+    if scenario is None:
+        return ()
+    longest = max([scenario.base_step, *scenario.steps.values()])
+    try:
+        short = scenario.with_overrides(stop_time=_WARM_UP_STEPS * longest)
+    except ConfigError:  # e.g. a step that does not divide the short stop time: no warm-up
+        return ()
+    # no digests: the worker keys its instances by the FMUs it finds, and each real run checks
+    # those against the digests the sweep hashed
+    return (RunTask(short, "", "warm-up", fmu_dir, {}, record_interval, allow_outside),)
 
 
 def _bar(total, initial, label):
@@ -209,9 +262,11 @@ def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers
     """
     from orchestrator.sweep.plan import plan_runs
 
-    planned = plan_runs(base, grid, out_dir, seeds=seeds, fmu_dir=fmu_dir,
-                        allow_outside=allow_outside)
-    return _execute(planned, out_dir, sorted(grid), fmu_dir, engine, scheduler, workers,
+    def plan(system):
+        return plan_runs(base, grid, out_dir, seeds=seeds, fmu_dir=fmu_dir, system=system,
+                         allow_outside=allow_outside)
+
+    return _execute(plan, base, out_dir, sorted(grid), fmu_dir, engine, scheduler, workers,
                     progress, record_interval, "sweep", allow_outside)
 
 
@@ -243,8 +298,12 @@ def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, wo
     """
     from orchestrator.sweep.plan import plan_scenarios
 
-    planned = plan_scenarios(scenarios, out_dir, settings=settings, fmu_dir=fmu_dir,
-                             allow_outside=allow_outside)
-    keys = list(dict.fromkeys(k for run in planned for k in run.settings))
-    return _execute(planned, out_dir, keys, fmu_dir, engine, scheduler, workers, progress,
-                    record_interval, "runs", allow_outside)
+    scenarios = list(scenarios)
+
+    def plan(system):
+        return plan_scenarios(scenarios, out_dir, settings=settings, fmu_dir=fmu_dir,
+                              allow_outside=allow_outside,
+                              systems={scenarios[0].system: system} if system else None)
+
+    return _execute(plan, scenarios[0] if scenarios else None, out_dir, None, fmu_dir, engine,
+                    scheduler, workers, progress, record_interval, "runs", allow_outside)

@@ -22,7 +22,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["RunTask", "WarmInstances", "run_task", "warm_instances"]
+__all__ = ["RunTask", "WarmInstances", "prepare", "run_task", "warm_instances",
+           "warm_up"]
 
 
 @dataclass
@@ -145,9 +146,12 @@ def warm_instances():
 
 
 def _forget_in_child():
-    # A forked child must not free (or reuse) instances that belong to its parent.
+    # A forked child must not free (or reuse) instances that belong to its parent; the loaded
+    # systems and file digests are plain data, kept (each use still checks the file's stat).
     global _WARM
-    _WARM = WarmInstances()
+    inherited, _WARM = _WARM, WarmInstances()
+    _WARM._systems = dict(inherited._systems)
+    _WARM._digests = dict(inherited._digests)
 
 
 os.register_at_fork(after_in_child=_forget_in_child)
@@ -188,6 +192,75 @@ def run_task(task, warm=None):
             summary.setdefault("error", text)
             return summary
         return _failed(text, started)
+
+
+def prepare(ssd_path, fmu_dir, allow_outside=False):
+    """Load, in this process, what every worker's first run needs and a fork can share.
+
+    The system of ``ssd_path`` (its ``.ssd`` and the FMUs' model descriptions) is kept in this
+    process's :class:`WarmInstances`, and each FMU is unpacked (:func:`orchestrator.fmu.
+    extract_once`); workers forked afterwards inherit both instead of redoing them.
+
+    Returns
+    -------
+    orchestrator.system.System
+
+    Raises
+    ------
+    ConfigError, SystemDescriptionError
+        As :func:`orchestrator.system.load_system`. An FMU that cannot be unpacked is left
+        for its runs to report.
+    """
+    from orchestrator.fmu import extract_once
+
+    system = _WARM.system(ssd_path, fmu_dir, allow_outside)
+    for component in system.components:
+        try:
+            extract_once(component.fmu_path)
+        except Exception:  # the run that needs it fails with the reason, as a row
+            pass
+    return system
+
+
+def warm_up(tasks, folder, warm=None):
+    """Pay a worker's first-run costs before its first task: a pool worker's initializer.
+
+    A process's first run pays more than the next ones: loading the system, loading each
+    FMU's binary and importing its Python code, and the run path's own first calls. Each of
+    ``tasks`` (typically the sweep's first run cut to a few steps) is run once here, in a
+    scratch folder removed afterwards, leaving this process's instances terminated and kept
+    for a reset, exactly as after a finished run. A local engine's workers do this while the
+    sweep's process still dispatches, instead of in their first task.
+
+    Never raises: a warm-up that fails leaves nothing kept (its instances are freed) and the
+    real run then meets, and reports, the same problem itself.
+
+    Parameters
+    ----------
+    tasks : sequence of RunTask
+        Runs to do once (their ``run_dir`` is not used).
+    folder : path-like
+        Scratch folder; each run goes into ``<folder>/<process id>-<n>``, and the folder is
+        removed once empty.
+    warm : WarmInstances, optional
+        Where instances are kept (default: this process's).
+    """
+    import dataclasses
+    import shutil
+
+    for number, task in enumerate(tasks):
+        run_dir = Path(folder) / f"{os.getpid()}-{number}"
+        task = dataclasses.replace(task, run_dir=str(run_dir))
+        try:
+            run_task(task, warm)
+        except BaseException:  # a run's failure is the run's to report, not the warm-up's
+            pass
+        finally:
+            shutil.rmtree(run_dir, ignore_errors=True)
+    try:  # the last worker out removes the folder (also when the sweep's process was killed)
+        os.rmdir(folder)
+    except OSError:
+        pass
 
 
 def _run(task, warm):

@@ -15,7 +15,8 @@ from orchestrator.build import REPO_ROOT
 from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
 from orchestrator.sweep import plan_runs, sweep
-from orchestrator.sweep.worker import RunTask, WarmInstances, run_task
+from orchestrator.sweep.runs import _warm_up_tasks
+from orchestrator.sweep.worker import RunTask, WarmInstances, run_task, warm_up
 
 pytestmark = pytest.mark.integration
 
@@ -156,6 +157,36 @@ def test_a_warm_workers_run_is_bit_identical_to_a_fresh_process(fmu_dir, tmp_pat
     fresh_summary = json.loads((tmp_path / "fresh" / "summary.json").read_text())
     warm_summary = json.loads((tmp_path / "second" / "summary.json").read_text())
     assert _figures(warm_summary) == _figures(fresh_summary)
+
+    # a pool worker's warm-up (another scenario, cut to a few steps) leaves the same six
+    # instances for the first task, which is again bit-identical; its scratch folder goes
+    warmed = WarmInstances()
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    try:
+        warm_up(_warm_up_tasks(other, str(fmu_dir), 0.02, False), scratch, warm=warmed)
+        assert (warmed.created, warmed.reused) == (6, 0)
+        assert not scratch.exists()
+        summary = run_task(RunTask(target, str(tmp_path / "after_warm_up"), "w", str(fmu_dir)),
+                           warm=warmed)
+        assert summary["status"] == "ok", summary
+        assert (warmed.created, warmed.reused) == (6, 6)
+    finally:
+        warmed.clear()
+    assert (tmp_path / "after_warm_up" / "results.csv").read_bytes() == fresh
+
+
+def test_a_failed_warm_up_keeps_nothing_and_raises_nothing(fmu_dir, tmp_path):
+    broken = tmp_path / "broken.csv"
+    broken.write_text("x,y\n0,1\n0,banana\n", encoding="utf-8")
+    scenario = _short(1.0).with_overrides(parameters={"source.path": str(broken)})
+    warm = WarmInstances()
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    warm_up(_warm_up_tasks(scenario, str(fmu_dir), 0.02, False), scratch, warm=warm)
+    # the source refused its path at initialisation: every instance of that run was freed
+    assert warm.created >= 1 and not warm._idle
+    assert not scratch.exists()
 
 
 def _dask_cli():
