@@ -12,16 +12,21 @@ time; ratios are taken within a repetition and their medians reported):
   processes started once before the repetitions (their start-up is reported apart).
 
 Every wall time is the whole child process, start-up and exit included, into a fresh folder
-(nothing reused). Then, in this process: the overhead of a run in a warm worker beyond its
-stepping (``run_task`` on kept instances, minus the time in ``Master.run``), and runs per
-second per core of the local 2-worker engine on the full default S-curve (30 s).
+(nothing reused). Then ``--breakdowns`` extra pairs (serial, local) run instrumented
+(``_sweep_timeline.py``): where the local engine's wall time goes (start-up on one core,
+engine start, planning, each worker's warm-up and tasks, gaps between tasks, the last run's
+tail, merging results and writing the table, closing, exit), and how its distance to half
+the serial loop's time splits into those parts. Then, in this process: the overhead of a run
+in a warm worker beyond its stepping (``run_task`` on kept instances, minus the time in
+``Master.run``), and runs per second per core of the local 2-worker engine on the full
+default S-curve (30 s).
 
 This machine has 2 cores shared with other work: the load average is recorded beside every
 figure, and targets are judged on the medians as measured.
 
 Writes benchmarks/results/sweep_scaling.json.
 
-    python benchmarks/sweep_scaling.py [--repeats 3] [--runs 16] [--stop-time 5]
+    python benchmarks/sweep_scaling.py [--repeats 3] [--runs 16] [--stop-time 5] [--breakdowns 3]
 """
 
 import argparse
@@ -42,22 +47,40 @@ SCENARIO = ROOT / "scenarios" / "s_curve.toml"
 FMUS = ["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner", "WheelController"]
 
 _CHILD = """
-import json, sys
+import json, sys, time
 from orchestrator.scenario import load_scenario
 variant, out, fmu_dir, runs, stop_time, address = sys.argv[1:7]
+timeline = variant.endswith("_timeline")
+variant = variant.removesuffix("_timeline")
+if timeline:
+    import tempfile
+    sys.path.insert(0, {benchmarks!r})
+    import _sweep_timeline as probe
 base = load_scenario({scenario!r}).with_overrides(stop_time=float(stop_time))
 seeds = list(range(1, int(runs) + 1))
+recorded = None
 if variant == "serial":
     from orchestrator.run import run_scenario
-    rows = [run_scenario(base.with_overrides(seed=seed), f"{{out}}/{{seed}}", progress=False,
-                         fmu_dir=fmu_dir, plots=False).summary for seed in seeds]
+    rows, recorded = [], []
+    for seed in seeds:
+        started, cpu = time.perf_counter(), time.process_time()
+        rows.append(run_scenario(base.with_overrides(seed=seed), f"{{out}}/{{seed}}",
+                                 progress=False, fmu_dir=fmu_dir, plots=False).summary)
+        recorded.append((started, time.perf_counter(), time.process_time() - cpu))
 else:
     from orchestrator.sweep import sweep
+    if timeline:
+        probe.install(tempfile.mkdtemp())
+        probe.mark("sweep_start")
     options = {{"workers": 2}} if variant == "local" else {{"scheduler": address}}
     result = sweep(base, {{}}, out, seeds=seeds, fmu_dir=fmu_dir, progress=False, **options)
+    if timeline:
+        probe.mark("sweep_end")
+        recorded = probe.events()
     assert result.computed == len(seeds) and result.failed == 0, result.rows
     rows = result.rows
-print(json.dumps([[r["seed"], r["status"], r.get("final_distance_to_source_m")] for r in rows]))
+print(json.dumps({{"rows": [[r["seed"], r["status"], r.get("final_distance_to_source_m")]
+                            for r in rows], "timeline": recorded}}))
 """
 
 
@@ -66,9 +89,8 @@ def _environment():
     return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
-def timed_child(variant, out, fmu_dir, runs, stop_time, address=""):
-    """Wall time of one whole child process running the runs, and its rows."""
-    script = _CHILD.format(scenario=str(SCENARIO))
+def _child(variant, out, fmu_dir, runs, stop_time, address):
+    script = _CHILD.format(scenario=str(SCENARIO), benchmarks=str(Path(__file__).parent))
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
@@ -76,13 +98,30 @@ def timed_child(variant, out, fmu_dir, runs, stop_time, address=""):
         [sys.executable, "-c", script, variant, str(out), str(fmu_dir), str(runs),
          str(stop_time), address], cwd=ROOT, capture_output=True, text=True, check=True,
         env=_environment())
-    wall = time.perf_counter() - started
+    ended = time.perf_counter()
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     # CPU of the child and of every process it waited for (a local pool's workers; not the
     # cluster's workers, which live on)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    rows = json.loads(completed.stdout.strip().splitlines()[-1])
-    return wall, rows, load, cpu
+    output = json.loads(completed.stdout.strip().splitlines()[-1])
+    return started, ended, output, load, cpu
+
+
+def timed_child(variant, out, fmu_dir, runs, stop_time, address=""):
+    """Wall time of one whole child process running the runs, its rows, load and CPU."""
+    started, ended, output, load, cpu = _child(variant, out, fmu_dir, runs, stop_time, address)
+    return ended - started, output["rows"], load, cpu
+
+
+def timeline_child(variant, out, fmu_dir, runs, stop_time):
+    """Breakdown of one extra, instrumented child of ``variant`` ("serial" or "local")."""
+    from _sweep_timeline import breakdown, serial_breakdown
+
+    started, ended, output, load, cpu = _child(f"{variant}_timeline", out, fmu_dir, runs,
+                                               stop_time, "")
+    figures = (serial_breakdown(output["timeline"], started, ended) if variant == "serial"
+               else breakdown(output["timeline"], started, ended))
+    return {**figures, "cpu_s": cpu, "load_average_1min": load}
 
 
 def _dask():
@@ -172,6 +211,41 @@ def warm_overhead(fmu_dir, work, runs, stop_time):
             cpu_overheads)
 
 
+def _breakdown_record(pairs):
+    """The pair with the median local wall time, and where its gap to serial / 2 goes."""
+    pair = sorted(pairs, key=lambda p: p["local"]["wall_s"])[len(pairs) // 2]
+    serial, local = pair["serial"], pair["local"]
+    busy = sum(w["busy_s"] for w in local["workers"])
+    gap = {
+        # one core: interpreter, imports, engine start (Dask, fork), planning and dispatch
+        # until the first task starts (the workers warm up meanwhile)
+        "before_first_task_s": local["before_first_task_s"]
+        - serial["interpreter_and_imports_s"] / 2,
+        # the tasks' own time beyond the serial loop's runs (its first run included), halved
+        "task_work_s": (busy - serial["runs_s"]) / 2,
+        # a core without a task while the other runs one (dispatch gaps, the last run's tail)
+        "idle_core_during_runs_s": local["idle_core_time_in_parallel_s"] / 2,
+        # after the last task: merging the last result, the table, closing the pool, exit
+        "after_last_task_s": local["after_last_task_s"] - serial["after_last_run_s"] / 2,
+    }
+    return {
+        "serial": serial, "local": local,
+        "speedup": serial["wall_s"] / local["wall_s"],
+        "ideal_local_s": serial["wall_s"] / 2,
+        "gap_to_ideal_s": local["wall_s"] - serial["wall_s"] / 2,
+        "gap_parts_s": gap,
+        "pairs": len(pairs),
+        "pair_walls_s": [[p["serial"]["wall_s"], p["local"]["wall_s"]] for p in pairs],
+        "note": "extra instrumented children after the timed repetitions (the pair with the "
+                "median local wall); instants are seconds after the child was spawned. "
+                "gap_to_ideal_s = local wall - serial wall / 2 = the sum of gap_parts_s: "
+                "before_first_task (local's start-up on one core minus half the serial "
+                "loop's), task_work (the workers' task time minus the serial loop's run time, "
+                "halved), idle_core_during_runs (halved), after_last_task (local minus half "
+                "the serial loop's)",
+    }
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
@@ -180,6 +254,8 @@ def main(argv=None):
     parser.add_argument("--s-curve-runs", type=int, default=6,
                         help="runs of the full default S-curve for runs per second per core")
     parser.add_argument("--no-cluster", action="store_true")
+    parser.add_argument("--breakdowns", type=int, default=3,
+                        help="extra instrumented serial/local pairs for the breakdown")
     args = parser.parse_args(argv)
 
     fmus = build_fresh(FMUS)
@@ -223,6 +299,13 @@ def main(argv=None):
             stop_cluster(cluster[1])
 
     speedups = {v: [s / w for s, w in zip(walls["serial"], walls[v])] for v in variants}
+    pairs = []
+    for r in range(args.breakdowns):
+        pair = {v: timeline_child(v, work / f"{v}_timeline{r}", fmu_dir, args.runs,
+                                  args.stop_time) for v in ("serial", "local")}
+        pairs.append(pair)
+        print(f"breakdown {r + 1}/{args.breakdowns}: serial {pair['serial']['wall_s']:.2f} s, "
+              f"local {pair['local']['wall_s']:.2f} s", flush=True)
     overhead_runs, reused, cpu_overheads = warm_overhead(fmu_dir, work / "warm", 12,
                                                          args.stop_time)
     overheads = [o for _, _, o in overhead_runs]
@@ -255,6 +338,7 @@ def main(argv=None):
         "speedup_bound_on_2_idle_cores": 2.0 / median([a / b for a, b in zip(
             cpus["local"], cpus["serial"])]),
         "rows_equal_across_variants": rows_equal,
+        "breakdown": _breakdown_record(pairs),
         "cluster": ({"started": True, "start_up_s": cluster[2], "workers": 2,
                      "note": "dask scheduler + 2 dask workers (--nthreads 1) on 127.0.0.1, "
                              "started once before the repetitions; their start-up is not in "
