@@ -29,8 +29,9 @@ def _clock():
 
 
 def _event(name, started, ended, **extra):
+    # cpu: the process's CPU time during the event; cpu_total: since the process started
     return {"name": name, "pid": os.getpid(), "start": started[0], "end": ended[0],
-            "cpu": ended[1] - started[1], **extra}
+            "cpu": ended[1] - started[1], "cpu_total": ended[1], **extra}
 
 
 def mark(name):
@@ -181,6 +182,9 @@ def breakdown(recorded, spawned, exited):
         "interpreter_and_imports_s": first("sweep_start")["start"] - spawned,
         "engine_start_s": start["end"] - start["start"],
         "engine_start_cpu_s": start["cpu"],
+        # the sweep's process's CPU from its start until the workers are forked: work that
+        # only one core can do, whatever the number of workers
+        "cpu_before_fork_s": start["cpu_total"],
         "plan_s": plan["end"] - plan["start"],
         "plan_cpu_s": plan["cpu"],
         "dispatch_start_s": since(run_start),

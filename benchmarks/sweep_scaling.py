@@ -228,9 +228,14 @@ def _breakdown_record(pairs):
         # after the last task: merging the last result, the table, closing the pool, exit
         "after_last_task_s": local["after_last_task_s"] - serial["after_last_run_s"] / 2,
     }
+    one_core = local["cpu_before_fork_s"]
     return {
         "serial": serial, "local": local,
         "speedup": serial["wall_s"] / local["wall_s"],
+        # on 2 idle cores (CPU time = wall time): the CPU before the fork on one core, the
+        # rest of the local tree's CPU spread perfectly over two
+        "speedup_bound_with_one_core_start": serial["cpu_s"] / (
+            one_core + (local["cpu_s"] - one_core) / 2),
         "ideal_local_s": serial["wall_s"] / 2,
         "gap_to_ideal_s": local["wall_s"] - serial["wall_s"] / 2,
         "gap_parts_s": gap,
