@@ -11,6 +11,8 @@ memory does not grow with the run's length. The figures:
   rose by one holds that attempt's status; attempts between two rows (never, with the default
   recording interval of 20 ms and fixes every 100 ms) are counted as ``"unrecorded"``;
 - ``fixes_rejected_by_gate``: the planner's ``rejected_fixes`` at the end;
+- ``wheel_check_stops``, ``odometry_check_stops``: the planner's ``wheel_faults`` and
+  ``odometry_faults`` at the end (times its wheel check and odometry check stopped the robot);
 - ``slip_time_s``: time with either wheel's |slip ratio| above :data:`SLIP_THRESHOLD`;
   ``max_slip_ratio``: largest |slip| of either wheel;
 - ``max_body_speed_m_s``: largest |plant.speed|;
@@ -65,6 +67,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     targets = sorted({target for target, _ in faults})
     wanted = ["time", "plant.speed", "plant.slip_left", "plant.slip_right",
               "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
+              "planner.wheel_faults", "planner.odometry_faults",
               "plant.x", "plant.y", "source.x", "source.y"]
     wanted += [f"{t}.faults_active" for t in targets]
     columns = [c for c in wanted if c in header]
@@ -75,7 +78,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     invalid, last_attempts, previous_time = {}, None, None
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
     active_time = {t: 0.0 for t in targets}
-    rejected = min_distance = last_speed = None
+    rejected = min_distance = last_speed = wheel_stops = odometry_stops = None
     for chunk in iter_result_chunks(path, columns, chunk_rows or DEFAULT_CHUNK_ROWS):
         time = chunk["time"]
         # each row stands for the interval since the previous row
@@ -105,6 +108,10 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
                     invalid["unrecorded"] = invalid.get("unrecorded", 0) + int(rise[row]) - 1
         if "planner.rejected_fixes" in have:
             rejected = int(chunk["planner.rejected_fixes"][-1])
+        if "planner.wheel_faults" in have:
+            wheel_stops = int(chunk["planner.wheel_faults"][-1])
+        if "planner.odometry_faults" in have:
+            odometry_stops = int(chunk["planner.odometry_faults"][-1])
         for target in targets:
             column = f"{target}.faults_active"
             if column in have:
@@ -125,6 +132,8 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
         "invalid_fixes": dict(sorted(invalid.items())),
         "invalid_fixes_total": int(sum(invalid.values())),
         "fixes_rejected_by_gate": rejected,
+        "wheel_check_stops": wheel_stops,
+        "odometry_check_stops": odometry_stops,
         "slip_threshold": SLIP_THRESHOLD,
         "slip_time_s": slip_time,
         "max_slip_ratio": max_slip,

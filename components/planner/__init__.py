@@ -8,6 +8,7 @@ from .geometry import (RADIUS_STRAIGHT, arc_curvature, arc_length, radius_of, st
                        wheel_arc_lengths, wheel_factors)
 from .limiter import limit_wheel_change
 from .odometry import Odometry
+from .odometry_check import OdometryCheck
 from .planner import (FIX_ACCEPTED, FIX_INVALID, FIX_NEGATIVE, FIX_NONE, IDLE, MODES, MOVING,
                       STOPPING, TURNING, TargetPlanner)
 from .pure_pursuit import PurePursuitMode
@@ -15,7 +16,7 @@ from .rotate_then_go import RotateThenGoMode
 
 __all__ = [
     "TargetPlanner", "MODES", "CurvatureMode", "RotateThenGoMode", "PurePursuitMode",
-    "Odometry", "limit_wheel_change",
+    "Odometry", "OdometryCheck", "limit_wheel_change",
     "RADIUS_STRAIGHT", "arc_curvature", "arc_length", "stop_arc_length", "wheel_factors",
     "wheel_arc_lengths", "radius_of",
     "IDLE", "MOVING", "STOPPING", "TURNING",

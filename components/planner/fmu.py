@@ -3,7 +3,7 @@
 from ..common.errors import InputError
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .geometry import RADIUS_STRAIGHT
-from .planner import FIX_NEGATIVE, TargetPlanner
+from .planner import BEARING_NOISE, FIX_NEGATIVE, TargetPlanner
 
 __all__ = ["CurvaturePlanner"]
 
@@ -21,6 +21,8 @@ _REAL_PARAMETERS = (
      "count for this long (frozen encoder, stalled wheel); 0 disables"),
     ("fix_timeout", "s", 0.0, "after this long without an accepted fix, drive out the last "
      "arc at half speed and stop at its end; 0 disables"),
+    ("bearing_noise", "rad", BEARING_NOISE, "odometry check: largest bearing error of one "
+     "fix (docs/faults.md)"),
 )
 
 
@@ -48,6 +50,7 @@ class CurvaturePlanner(SonotrackSlave):
         for name, _, default, _ in _REAL_PARAMETERS:
             setattr(self, name, default)
         self.mode = "curvature"
+        self.odometry_check = False
         self.core = TargetPlanner()
         self.v_ref_left = 0.0
         self.v_ref_right = 0.0
@@ -63,6 +66,10 @@ class CurvaturePlanner(SonotrackSlave):
         self.fix_age = 0.0
         self.fix_timed_out = False
         self.wheel_faults = 0
+        self.odometry_faults = 0
+        self.stop_reason = 0
+        self.bearing_discrepancy = 0.0
+        self.bearing_bound = 0.0
 
         self.input_real("distance", "m", "distance of the latest fix from the array centre")
         self.input_real("bearing", "rad", "bearing of the latest fix, left (CCW) positive")
@@ -88,9 +95,20 @@ class CurvaturePlanner(SonotrackSlave):
         self.output_boolean("fix_timed_out", "no accepted fix for fix_timeout: driving out "
                             "the last arc at half speed, or stopped at its end")
         self.output_integer("wheel_faults", "times the wheel check stopped the robot")
+        self.output_integer("odometry_faults", "times the odometry check stopped the robot "
+                            "(fix bearings drifting from the odometry's prediction)")
+        self.output_real("bearing_discrepancy", "rad", "odometry check: latest fix's bearing "
+                         "minus the odometry's prediction from the previous fix (0 when off)")
+        self.output_real("bearing_bound", "rad", "odometry check: the discrepancy a source at "
+                         "max_target_speed and the fix noise explain (0 when off)")
+        self.output_integer("stop_reason", "why the references are held at 0: 0 they are not, "
+                            "1 wheel check, 2 odometry check")
         for name, unit, _, text in _REAL_PARAMETERS:
             self.parameter_real(name, unit, text)
         self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
+        self.parameter_boolean("odometry_check", "stop for 1 s when the fixes' bearings drift "
+                               "from the odometry's prediction by more than a source at "
+                               "max_target_speed and the fix noise explain (docs/faults.md)")
         # distance and bearing mean something only while valid is true.
         self._bounds_valid = self.input_bounds(("distance", "bearing", "measurement_id",
                                                 "wheel_speed_left", "wheel_speed_right"))
@@ -99,7 +117,8 @@ class CurvaturePlanner(SonotrackSlave):
 
     def exit_initialization_mode(self):
         parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
-        self.core = TargetPlanner(mode=str(self.mode), **parameters)
+        self.core = TargetPlanner(mode=str(self.mode), odometry_check=bool(self.odometry_check),
+                                  **parameters)
 
     def do_step(self, current_time, step_size):
         left, right = self.wheel_speed_left, self.wheel_speed_right
@@ -130,4 +149,10 @@ class CurvaturePlanner(SonotrackSlave):
         self.fix_age = current_time - core.last_accepted_time if core.has_target else 0.0
         self.fix_timed_out = core.timed_out
         self.wheel_faults = core.wheel_faults
+        self.odometry_faults = core.odometry_faults
+        self.stop_reason = core.stop_reason
+        check = core.odometry_check
+        if check is not None:
+            self.bearing_discrepancy = check.last_discrepancy
+            self.bearing_bound = check.last_bound
         return True

@@ -7,12 +7,15 @@ from .curvature_mode import CurvatureMode
 from .geometry import radius_of
 from .limiter import limit_wheel_change
 from .odometry import Odometry
+from .odometry_check import OdometryCheck
 from .pure_pursuit import PurePursuitMode
 from .rotate_then_go import RotateThenGoMode
 
 __all__ = ["TargetPlanner", "MODES", "IDLE", "MOVING", "STOPPING", "TURNING",
-           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE", "FIX_REJECTED", "REACQUIRE_AFTER", "HOLD_SPEED_FACTOR", "WHEEL_CHECK_SPEED",
-           "WHEEL_STUCK_SPEED", "WHEEL_RETRY"]
+           "FIX_NONE", "FIX_ACCEPTED", "FIX_INVALID", "FIX_NEGATIVE", "FIX_REJECTED",
+           "REACQUIRE_AFTER", "HOLD_SPEED_FACTOR", "WHEEL_CHECK_SPEED", "WHEEL_STUCK_SPEED",
+           "WHEEL_RETRY", "ODOMETRY_RETRY", "BEARING_NOISE", "STOP_NONE", "STOP_WHEEL",
+           "STOP_ODOMETRY"]
 
 # After this many fixes in a row fail the gate, the next one is taken anyway: the target did
 # move (a source that turns up elsewhere) rather than the localizer erring that often in a row.
@@ -29,6 +32,18 @@ HOLD_SPEED_FACTOR = 0.5
 WHEEL_CHECK_SPEED = 0.1
 WHEEL_STUCK_SPEED = 0.013
 WHEEL_RETRY = 1.0
+# Odometry check (OdometryCheck): when the fixes' bearings drift from what the odometry
+# predicts, the robot stops at once (the wheel that the odometry misreads may be running at a
+# multiple of its reference), stands for ODOMETRY_RETRY, then drives again on the fixes taken
+# while standing. The same second as the wheel check: the body's mechanical time constant is
+# 0.39 s (docs/plant.md), so after 1 s it is at rest and the standing fixes see the source alone.
+ODOMETRY_RETRY = 1.0
+# Largest bearing error of a fix the localizer lets through [rad], measured on every shipped
+# scenario (docs/faults.md): 0.15 deg on fault-free fixes, 0.42 deg at 0 dB SNR; rounded up.
+BEARING_NOISE = 0.01
+
+# Why the references are held at 0 (the ``stop_reason`` output).
+STOP_NONE, STOP_WHEEL, STOP_ODOMETRY = 0, 1, 2
 
 MODES = {mode.name: mode for mode in (CurvatureMode, RotateThenGoMode, PurePursuitMode)}
 
@@ -83,11 +98,19 @@ class TargetPlanner:
         A wheel told to turn (|reference| >= :data:`WHEEL_CHECK_SPEED`) whose encoder shows no
         motion for this long [s] stops the robot for :data:`WHEEL_RETRY` (``wheel_faults``
         counts the trips); 0 disables.
+    odometry_check : bool
+        Compare each accepted fix's bearing with the odometry's prediction
+        (:class:`.OdometryCheck`, needs ``max_target_speed`` > 0); when they disagree on
+        several fixes in a row the robot stops at once for :data:`ODOMETRY_RETRY`
+        (``odometry_faults`` counts the trips). Off by default (the paper has none).
+    bearing_noise : float
+        Largest bearing error of one fix [rad] for the odometry check.
     """
 
     def __init__(self, track_width=0.289, v_cruise=0.3, v_max=0.4, a_max=0.4,
                  stop_distance=0.5, mode="curvature", max_target_speed=0.0,
-                 target_jump_margin=0.3, fix_timeout=0.0, wheel_check_time=0.0):
+                 target_jump_margin=0.3, fix_timeout=0.0, wheel_check_time=0.0,
+                 odometry_check=False, bearing_noise=BEARING_NOISE):
         if mode not in MODES:
             raise ParameterError(f"mode = {mode!r}: not one of {sorted(MODES)}")
         for name, value in (("track_width", track_width), ("v_cruise", v_cruise),
@@ -99,9 +122,21 @@ class TargetPlanner:
         for name, value in (("max_target_speed", max_target_speed),
                             ("target_jump_margin", target_jump_margin),
                             ("fix_timeout", fix_timeout),
-                            ("wheel_check_time", wheel_check_time)):
+                            ("wheel_check_time", wheel_check_time),
+                            ("bearing_noise", bearing_noise)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise ParameterError(f"{name} = {value!r}: must be a finite number >= 0")
+        if odometry_check and not max_target_speed > 0.0:
+            raise ParameterError("odometry_check = true needs max_target_speed > 0 (the bound "
+                                 f"on the source's motion); got {max_target_speed!r}")
+        self.odometry_check = (OdometryCheck(max_target_speed, bearing_noise, track_width)
+                               if odometry_check else None)
+        self.odometry_faults = 0
+        self.odometry_stop_until = -math.inf
+        self.step_turn = 0.0
+        self.step_travel = 0.0
+        self.step_size = 0.0
+        self.stop_reason = STOP_NONE
         self.max_target_speed = float(max_target_speed)
         self.target_jump_margin = float(target_jump_margin)
         self.fix_timeout = float(fix_timeout)
@@ -198,7 +233,14 @@ class TargetPlanner:
         elapsed = time - self.last_time if self.started else 0.0
         self.started = True
         self.last_time = float(time)
-        self.odometry.advance(wheel_speed_left, wheel_speed_right, elapsed)
+        if self.odometry_check is not None:
+            heading = self.odometry.heading
+            self.odometry.advance(wheel_speed_left, wheel_speed_right, elapsed)
+            self.step_turn = abs(self.odometry.heading - heading)
+            self.step_travel = abs(0.5 * (wheel_speed_left + wheel_speed_right) * elapsed)
+            self.step_size = float(step_size)
+        else:
+            self.odometry.advance(wheel_speed_left, wheel_speed_right, elapsed)
         mode = self.mode
         mode.record_progress(wheel_speed_left * elapsed, wheel_speed_right * elapsed)
         self.fix_outcome = FIX_NONE
@@ -219,9 +261,14 @@ class TargetPlanner:
                                                    desired_left, desired_right,
                                                    self.a_max * step_size)
         mode.after_limit(fraction)
+        self.stop_reason = STOP_NONE
         if self.wheel_check_time > 0.0 and self._wheel_stuck(time, wheel_speed_left,
                                                              wheel_speed_right):
             left = right = 0.0
+            self.stop_reason = STOP_WHEEL
+        elif time < self.odometry_stop_until:
+            left = right = 0.0
+            self.stop_reason = STOP_ODOMETRY
         # The state output, classified here rather than in a helper (this runs every step).
         if left == 0.0 and right == 0.0 and previous_left == 0.0 and previous_right == 0.0:
             self.state = IDLE
@@ -249,10 +296,24 @@ class TargetPlanner:
                 return
             self.fix_outcome = FIX_ACCEPTED
             self.rejected_in_row = 0
+            if self.odometry_check is not None:
+                self._check_odometry(time, target_x, target_y, distance, bearing)
             self.last_accepted_time = float(time)
             self.has_target = True
             self.target_x, self.target_y = target_x, target_y
             self.mode.on_fix(self, distance, bearing)
+
+    def _check_odometry(self, time, target_x, target_y, distance, bearing):
+        """The odometry check (see ``odometry_check``): start the stop when it trips."""
+        check = self.odometry_check
+        tripped = check.observe(time, target_x, target_y, distance, bearing, self.odometry,
+                                self.step_turn, self.step_travel, self.step_size)
+        if time < self.odometry_stop_until:
+            # standing already: the fixes taken while braking are not counted again
+            check.reset_count()
+        elif tripped:
+            self.odometry_faults += 1
+            self.odometry_stop_until = time + ODOMETRY_RETRY
 
     def _implausible(self, time, target_x, target_y):
         """The gate: does the fix imply a target faster than ``max_target_speed``?"""

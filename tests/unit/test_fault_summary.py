@@ -9,7 +9,8 @@ from orchestrator.fault_metrics import SLIP_THRESHOLD, fault_summary_from_csv
 
 _COLUMNS = ("time", "plant.x", "plant.y", "source.x", "source.y", "plant.speed",
             "plant.slip_left", "plant.slip_right", "localizer.fix_attempts",
-            "localizer.fix_status", "planner.rejected_fixes", "localizer.faults_active")
+            "localizer.fix_status", "planner.rejected_fixes", "localizer.faults_active",
+            "planner.wheel_faults", "planner.odometry_faults")
 
 
 def _write(path, rows):
@@ -29,7 +30,7 @@ def test_counts_and_extremes(tmp_path, chunk_rows):
         speed = 0.0 if k >= 18 else 0.3 - 0.01 * k
         active = 1 if 0.2 <= t < 0.5 else 0
         rows.append((t, 0.0, 0.1 * min(k, 15), 0.0, 2.0, speed, -slip, 0.0, attempts,
-                     status, k // 5, active))
+                     status, k // 5, active, k // 10, k // 7))
     # the last row holds two new attempts (10 -> 12): the one shown and one never recorded
     rows[-1] = rows[-1][:8] + (rows[-1][8] + 2,) + rows[-1][9:]
     path = tmp_path / "results.csv"
@@ -41,6 +42,7 @@ def test_counts_and_extremes(tmp_path, chunk_rows):
                                         "no burst onset detected": 1, "unrecorded": 1}
     assert summary["invalid_fixes_total"] == 6
     assert summary["fixes_rejected_by_gate"] == 3
+    assert summary["wheel_check_stops"] == 1 and summary["odometry_check_stops"] == 2
     assert summary["slip_time_s"] == pytest.approx(4 * 0.05)
     assert summary["max_slip_ratio"] == pytest.approx(0.5) and SLIP_THRESHOLD < 0.5
     assert summary["max_body_speed_m_s"] == pytest.approx(0.3)
@@ -59,4 +61,5 @@ def test_too_close_is_not_safe_and_missing_columns_are_named(tmp_path):
     assert summary["stopped_safely"] is False           # 0.1 m < 0.25 m
     assert "localizer.fix_status" in summary["not_recorded"]
     assert summary["invalid_fixes"] == {} and summary["fixes_rejected_by_gate"] is None
+    assert summary["odometry_check_stops"] is None
     assert not math.isnan(summary["max_body_speed_m_s"])
