@@ -1,9 +1,11 @@
 """`sonotrack verify`: the wheel-speed loop's checks with verdicts and their reports.
 
 Modules: :mod:`.loop_model` (the sampled loop), :mod:`.analysis` (poles, margins, edges,
-Routh), :mod:`.robustness` (other plants), :mod:`.measure` (the figures of a run),
-:mod:`.fmu_runs` (the built FMUs against the models), :mod:`.checks` (requirements and
-verdicts), :mod:`.figures`, :mod:`.markdown`, :mod:`.html_page`, :mod:`.report`
+Routh), :mod:`.robustness` (other plants, the largest stable plant-gain factor),
+:mod:`.case1` (the paper's Case 1 on the nonlinear plant core), :mod:`.measure` (the figures
+of a run), :mod:`.fmu_runs` (the built FMUs against the models), :mod:`.checks`
+(requirements and verdicts) and :mod:`.robust_checks` (those on other plants),
+:mod:`.figures`, :mod:`.markdown`, :mod:`.html_page`, :mod:`.report`
 (:func:`verify`) and :mod:`.cli`.
 """
 
@@ -18,7 +20,10 @@ from .fmu_runs import (
 )
 from .loop_model import LinearWheelModel, WheelLoopModel, linear_wheel_model
 from .report import DEFAULT_OUT_DIR, VerificationReport, verify
-from .robustness import PlantVariant, robustness_point, steady_state_error
+from .robustness import (
+    PlantVariant, largest_stable_gain_factor, plant_gain_edges, robustness_point,
+    steady_state_error,
+)
 
 __all__ = [
     "KP_SEARCH_MAX", "GainAnalysis", "analyse_gains", "continuous_gain_bound",
@@ -27,5 +32,6 @@ __all__ = [
     "closed_loop_fmu_comparison", "compliance_bound", "controller_fmu_comparison",
     "fmu_step_comparison", "LinearWheelModel", "WheelLoopModel", "linear_wheel_model",
     "DEFAULT_OUT_DIR", "VerificationReport", "verify",
-    "PlantVariant", "robustness_point", "steady_state_error",
+    "PlantVariant", "robustness_point", "steady_state_error", "largest_stable_gain_factor",
+    "plant_gain_edges",
 ]

@@ -238,6 +238,36 @@ def _robustness(plt, f, path):
     return path
 
 
+def _gain_factor_edges(plt, f, path):
+    edges = f["gain_factor_edges"]
+    taus = np.array(edges["time_constant_factors"])
+    required = f["requirements_grid"]
+    fig, ax = plt.subplots(figsize=(9.0, 4.6))
+    low_g, high_g = min(required["gain_factors"]), max(required["gain_factors"])
+    low_t, high_t = min(required["time_constant_factors"]), max(required["time_constant_factors"])
+    ax.fill_between([low_t, high_t], low_g, high_g, color="tab:green", alpha=0.12,
+                    label=f"required: gain x{low_g:g}..x{high_g:g}, tau x{low_t:g}..x{high_t:g}")
+    for g in required["finding_gain_factors"]:
+        ax.axhline(g, color="tab:red", ls="--", lw=1, label=f"finding: gain x{g:g}")
+    styles = {"fgs_pd": "-", "pd": "--", "pid": ":"}
+    for s in edges["sets"]:
+        upper = np.array([e["upper"] if e["nominal_stable"] else np.nan for e in s["edges"]])
+        label = f"{s['controller']} (kp {s['kp']:g}, kd {s['kd']:g}, ki {s['ki']:g})"
+        ax.plot(taus, upper, styles.get(s["controller"], "-"), marker=".", label=label)
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log", base=2)
+    ax.set_xticks([0.5, 0.71, 1, 1.41, 2], ["x0.5", "x0.71", "x1", "x1.41", "x2"])
+    ticks = [2.0 ** k for k in range(-2, 6)]
+    ax.set_yticks(ticks, [f"x{t:g}" for t in ticks])
+    ax.set_xlabel("plant time-constant factor")
+    ax.set_ylabel("largest stable plant DC-gain factor")
+    ax.set_title("Stable up to this plant gain (above a line: unstable); T = "
+                 f"{1000 * f['model']['period_s']:g} ms", fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _save(plt, fig, path)
+
+
 def write_figures(model, figures, out_dir):
     """Draw every figure into ``out_dir``; return ``name -> (path, caption)``."""
     plt = _pyplot()
@@ -255,6 +285,9 @@ def write_figures(model, figures, out_dir):
          "Closed-loop poles at every grid point, coloured by kp."),
         ("robustness", lambda p: _robustness(plt, figures, p),
          "Steady-state error per controller on the plant grid (unst. = unstable)."),
+        ("gain_factor_edges", lambda p: _gain_factor_edges(plt, figures, p),
+         "Largest stable plant DC-gain factor of each frozen gain set against the plant's "
+         "time-constant factor, with the required region and the x4 finding."),
     ]
     if figures.get("fmu_step"):
         plan.append(("fmu_vs_tf", lambda p: _plant_fmu(plt, figures, p),

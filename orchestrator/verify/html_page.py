@@ -2,7 +2,7 @@
 
 from orchestrator.html_report import Column, HtmlReport
 
-from .markdown import LIMITS
+from .markdown import EDGE_TIME_CONSTANTS, LIMITS, edge_rows, edge_statements, findings
 
 __all__ = ["html_report"]
 
@@ -34,6 +34,12 @@ def html_report(report, model, strict=False):
                       css_class="pass" if s["exit_status"] == 0 else "fail")
     verdict.table(["check", "requirement", "measured", "verdict"],
                   [[c.name, c.requirement, c.measured, c.verdict] for c in report.checks])
+    bad = findings(report)
+    if bad:
+        read = page.section("Failures and findings a designer must read", level=3)
+        for c in bad:
+            read.paragraph(f"{c.verdict}: {c.name} ({c.title}). {c.measured}",
+                           css_class="fail" if c.verdict == "FAIL" else "warn")
     why = page.section("Why each threshold", level=3)
     why.table(["check", "justification"], [[c.name, " ".join(c.why.split())]
                                            for c in report.checks])
@@ -57,6 +63,17 @@ def html_report(report, model, strict=False):
                 for g in surface["grid"]],
                caption=f"Frozen gain sets (integral trim ki = {surface['ki']:g} 1/s)")
     robust = page.section("Robustness to the plant")
+    for sentence in f.get("robustness_statement", []):
+        robust.paragraph(" ".join(sentence.split()))
+    robust.bullets(edge_statements(f["gain_factor_edges"]))
+    robust.table(["gain set", Column("kp", "1", "g"), Column("kd", "1", "g"),
+                  Column("ki", "1/s", "g")]
+                 + [Column(f"largest gain factor, tau x{t:g}", "1", ".3f")
+                    for t in EDGE_TIME_CONSTANTS]
+                 + [Column("oscillation at the edge, tau x1", "Hz", ".2f")],
+                 edge_rows(f["gain_factor_edges"]),
+                 caption="Largest stable plant-DC-gain factor (Brent on max|z| - 1, Routh on "
+                         "the w-plane; no lower edge down to x1/64)")
     r = f["robustness"]
     rows = []
     for name, points in list(r["points"].items()) + [("fgs_pd, pure PD (trim off)",

@@ -3,7 +3,12 @@
 import math
 from pathlib import Path
 
-__all__ = ["markdown_report", "fmt", "LIMITS"]
+__all__ = ["markdown_report", "fmt", "LIMITS", "edge_rows", "edge_statements", "findings",
+           "EDGE_TIME_CONSTANTS"]
+
+# Columns of the largest-stable-gain-factor table (the figure has the finer grid).
+EDGE_TIME_CONSTANTS = (0.5, 1.0, 2.0)
+_NAMES = {"fgs_pd": "FGS-PD corner", "pd": "fixed PD", "pid": "PID"}
 
 # What the linear model leaves out, said in every report (Markdown and HTML).
 LIMITS = [
@@ -48,10 +53,60 @@ def _robustness_table(points, gains, taus):
         cells = []
         for g in gains:
             p = by[(g, tau)]
-            cells.append("unstable" if p["spectral_radius"] >= 1.0 else
-                         f"{100 * p['steady_state_error']:.2f} % / {p['settling_time_s']:.2f} s")
+            cells.append(f"**unstable** ({p['spectral_radius']:.3f})"
+                         if p["spectral_radius"] >= 1.0 else
+                         f"{100 * p['steady_state_error']:.2f} % / {p['settling_time_s']:.2f} s "
+                         f"({p['spectral_radius']:.4f})")
         rows.append(f"| x{tau:g} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
+
+
+def _edge_at(gain_set, tau):
+    return next((e for e in gain_set["edges"] if abs(e["time_constant_factor"] - tau) < 1e-9),
+                None)
+
+
+def edge_rows(edge_sets, taus=EDGE_TIME_CONSTANTS):
+    """One row per frozen gain set: controller, kp, kd, ki, then per tau the largest stable
+    plant-gain factor (None when unstable at x1, the search's end when not found) and the
+    oscillation frequency [Hz] at the edge for tau x1."""
+    rows = []
+    for gain_set in edge_sets["sets"]:
+        cells = []
+        for tau in taus:
+            e = _edge_at(gain_set, tau)
+            cells.append(e["upper"] if e and e["nominal_stable"] else None)
+        nominal = _edge_at(gain_set, 1.0)
+        rows.append([_NAMES.get(gain_set["controller"], gain_set["controller"]),
+                     gain_set["kp"], gain_set["kd"], gain_set["ki"], *cells,
+                     nominal["crossing_hz"] if nominal else None])
+    return rows
+
+
+def edge_statements(edge_sets, taus=EDGE_TIME_CONSTANTS):
+    """'stable up to xG plant gain at tau xT' for the weakest gain set of each controller."""
+    lines = []
+    for controller in dict.fromkeys(s["controller"] for s in edge_sets["sets"]):
+        parts = []
+        for tau in taus:
+            candidates = [(e["upper"], s) for s in edge_sets["sets"]
+                          if s["controller"] == controller
+                          for e in [_edge_at(s, tau)] if e and e["nominal_stable"]]
+            if candidates:
+                upper, weakest = min(candidates, key=lambda c: c[0])
+                parts.append(f"x{upper:.3g} plant gain at tau x{tau:g}"
+                             + (f" (kp {weakest['kp']:g}, kd {weakest['kd']:g})"
+                                if controller == "fgs_pd" else ""))
+        lines.append(f"{_NAMES.get(controller, controller)}"
+                     f"{'s (weakest corner)' if controller == 'fgs_pd' else ''}: stable up to "
+                     + ", ".join(parts) + ".")
+    return lines
+
+
+def findings(report):
+    """Every check that did not pass (failures first, then warnings)."""
+    return sorted((c for c in report.checks if not c.passed),
+                  key=lambda c: c.severity != "requirement")
 
 
 def _escape(text):
@@ -75,7 +130,13 @@ def markdown_report(report, strict=False):
     lines += [f"| {c.name} | {_escape(c.requirement)} | {_escape(c.measured)} | "
               f"**{c.verdict}** |" for c in report.checks]
     lines += ["", "Why each threshold is what it is: "
-              "`orchestrator/data/verification_requirements.toml`.", "", "## Figures", ""]
+              "`orchestrator/data/verification_requirements.toml`.", ""]
+    bad = findings(report)
+    if bad:
+        lines += ["### Failures and findings a designer must read", ""]
+        lines += [f"- **{c.verdict}** `{c.name}` ({c.title}): {c.measured}" for c in bad]
+        lines += [""]
+    lines += ["## Figures", ""]
     for name, caption in report.captions.items():
         lines += [f"![{caption}]({Path(report.paths[name]).name})", "", f"*{caption}*", ""]
     lines += [
@@ -111,8 +172,22 @@ def markdown_report(report, strict=False):
               f"{surface['summary']['linear_step_limit_min_m_s']:.3f} m/s from rest saturates "
               "the voltage at some gain of the surface.", ""]
     r = f["robustness"]
-    lines += ["## Robustness to the plant", "",
-              "Cell: steady-state error (final value theorem) / settling time into +-5 %.", ""]
+    lines += ["## Robustness to the plant", ""]
+    for sentence in f.get("robustness_statement", []):
+        lines += [" ".join(sentence.split()), ""]
+    lines += ["Largest stable plant-DC-gain factor of each frozen gain set (exact: Brent on "
+              "max abs(z) - 1, Routh on the w-plane to agree within 1e-9; no lower edge down "
+              "to x1/64):", ""]
+    lines += [f"- {x}" for x in edge_statements(f["gain_factor_edges"])] + [""]
+    lines += ["| gain set | kp | kd | ki [1/s] | "
+              + " | ".join(f"largest gain factor, tau x{t:g}" for t in EDGE_TIME_CONSTANTS)
+              + " | oscillation at the edge, tau x1 [Hz] |",
+              "|---" * (5 + len(EDGE_TIME_CONSTANTS)) + "|"]
+    lines += ["| " + " | ".join([row[0], fmt(row[1], "g"), fmt(row[2], "g"), fmt(row[3], "g")]
+                                + [fmt(v, ".3f") for v in row[4:-1]] + [fmt(row[-1], ".2f")])
+              + " |" for row in edge_rows(f["gain_factor_edges"])]
+    lines += ["", "Cell: steady-state error (final value theorem) / settling time into +-5 % "
+              "(largest abs(z)); unstable cells give abs(z).", ""]
     for name, points in list(r["points"].items()) + [("fgs_pd, pure PD (trim off)",
                                                       f["robustness_pure_pd"])]:
         lines += [f"**{name}**", "", _robustness_table(points, r["gain_factors"],

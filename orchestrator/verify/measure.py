@@ -20,7 +20,8 @@ from .robustness import largest_stable_gain_factor, plant_grid, robustness_point
 
 __all__ = ["gain_surface", "reachable_gains", "surface_distances", "paper_box",
            "pid_baseline", "robustness", "gain_factor_edges", "gain_sets", "routh_finding",
-           "core_cross_check", "pd_forms", "PAPER_BOX_SIGNED", "FINE_TIME_CONSTANT_FACTORS"]
+           "core_cross_check", "pd_forms", "paper_case1", "PAPER_BOX_SIGNED",
+           "FINE_TIME_CONSTANT_FACTORS"]
 
 # The paper's printed ranges on its own error convention (y - r): Sec. 4.1.
 PAPER_BOX_SIGNED = {"Kp": (-4.0, -3.0), "Kd": (-2.0, -0.3)}
@@ -211,3 +212,21 @@ def pd_forms(model, settings):
     kps = (settings["kp_min"], 0.5 * (settings["kp_min"] + settings["kp_max"]), settings["kp_max"])
     kds = (settings["kd_min"], 0.5 * (settings["kd_min"] + settings["kd_max"]), settings["kd_max"])
     return {"incremental": [incremental_form(model, kp, kd) for kp in kps for kd in kds]}
+
+
+def paper_case1(settings, plant=None, period=0.02):
+    """Paper Case 1 on the nonlinear plant core: FGS-PD (as configured and without the trim)
+    and the CPID, every other controller setting as given (:mod:`.case1`).
+
+    Returns
+    -------
+    dict
+        ``results`` (controller -> wheel -> metrics), ``period_s``, ``trim_ki``.
+    """
+    from .case1 import compare
+
+    configs = {"fgs_pd": dict(settings, mode="fgs_pd"),
+               "fgs_pd_pure": dict(settings, mode="fgs_pd", trim_ki=0.0),
+               "pid": dict(settings, mode="pid")}
+    return {"results": compare(configs, h=period, plant_parameters=plant),
+            "period_s": float(period), "trim_ki": _trim(settings)}

@@ -21,6 +21,7 @@ from components.plant.motor import steady_wheel_speed
 from components.plant.parameters import PlantParameters
 
 from . import checks as C
+from . import robust_checks as R
 from . import measure
 from .analysis import stability_boundary
 from .fmu_runs import (
@@ -159,6 +160,27 @@ def robustness_grid(req):
     return gains, taus
 
 
+def robustness_statement(req, checks):
+    """The plant-robustness requirement and its reasoning, then each x4 finding, as sentences."""
+    robust, beyond = req["robust_stability"], req["robust_stability_x4"]
+    gains, taus = robust["gain_factors"], robust["time_constant_factors"]
+    margin = req["gain_margin"]["min_gain_margin"]
+    lines = [
+        f"Requirement: every frozen gain set stable for plant DC gain x{min(gains):g}.."
+        f"x{max(gains):g} and time constant x{min(taus):g}..x{max(taus):g} of RobotPlant's. "
+        "A plant-gain factor G is, for stability, the whole controller made G times stronger, "
+        f"so x{max(gains):g} is the {20 * math.log10(max(gains)):.0f} dB the gain-margin "
+        f"requirement states (gain margin >= {margin:g}); at tau x1 the largest stable G "
+        "equals the gain margin. An earlier version of the requirement asked for x0.25..x4 "
+        "(12 dB), inconsistent with the gain margin; the "
+        + "/".join(f"x{g:g}" for g in beyond["gain_factors"])
+        + " column is still evaluated and shown, as the finding robust_stability_x4 (a "
+        "warning; a failure with --strict)."]
+    lines += [f"Finding: {c.measured}" for c in checks
+              if c.name.startswith("robust_stability_x4") and not c.passed]
+    return lines
+
+
 def _judge(f, settings, req):
     surface = f["surface"]
     out = [
@@ -184,13 +206,16 @@ def _judge(f, settings, req):
     out.append(C.check_paper_gain_box(f["paper_box"], req["paper_gain_box"]))
     for name in ("fgs_pd", "pd", "pid"):
         points = f["robustness"]["points"][name]
-        out.append(C.check_robust_stability(points, f["gain_factor_edges"], name,
+        out.append(R.check_robust_stability(points, f["gain_factor_edges"], name,
                                             req["robust_stability"]))
-        out.append(C.check_robust_stability_beyond(points, f["gain_factor_edges"], name,
+        out.append(R.check_robust_stability_beyond(points, f["gain_factor_edges"], name,
                                                    req["robust_stability_x4"]))
-        out.append(C.check_robust_steady_state(points, name, req["robust_steady_state"]))
+        out.append(R.check_robust_steady_state(points, name, req["robust_steady_state"]))
     out.append(C.check_routh_gives_paper_bounds(f["routh_finding"], settings,
                                                 req["routh_gives_paper_bounds"]))
+    out.append(C.check_fgs_pd_overshoot_vs_pid(f["paper_case1"],
+                                               surface["summary"]["overshoot_max_pct"],
+                                               req["fgs_pd_overshoot_vs_pid"]))
     return out
 
 
@@ -253,6 +278,10 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
     f["pid"] = measure.pid_baseline(model, settings)
     f["core_cross_check"] = measure.core_cross_check(model, settings)
     gains, taus = robustness_grid(req)
+    f["requirements_grid"] = {
+        "gain_factors": req["robust_stability"]["gain_factors"],
+        "time_constant_factors": req["robust_stability"]["time_constant_factors"],
+        "finding_gain_factors": req["robust_stability_x4"]["gain_factors"]}
     f["robustness"] = measure.robustness(model, settings, gains, taus)
     f["gain_factor_edges"] = measure.gain_factor_edges(
         model, settings, sorted(set(measure.FINE_TIME_CONSTANT_FACTORS) | set(taus)))
@@ -260,6 +289,7 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
     f["robustness_pure_pd"] = measure.robustness(
         model, pure, gains, taus, controllers=("fgs_pd",))["points"]["fgs_pd"]
     f["routh_finding"] = measure.routh_finding(model, settings)
+    f["paper_case1"] = measure.paper_case1(settings, plant, model.period)
     f["pd_forms"] = measure.pd_forms(model, settings)
     if extra_delay == 0:
         jacobi = replace(model, extra_delay=1)
@@ -279,6 +309,7 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
             f["closed_loop_fmus"] = closed_loop_fmu_comparison(
                 model, settings, points, step=req["closed_loop_fmus_vs_tf"]["step_m_s"])
     report = VerificationReport(f, _judge(f, settings, req))
+    f["robustness_statement"] = robustness_statement(req, report.checks)
     if plots:
         from .figures import write_figures
 

@@ -34,7 +34,8 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     result, out = report
     for name in ("verification.json", "verification.md", "verification.html", "pole_map.png",
                  "step_responses.png", "fmu_vs_tf.png", "stability_region.png",
-                 "bode_corners.png", "root_locus.png", "robustness.png", "closed_loop_fmus.png"):
+                 "bode_corners.png", "root_locus.png", "robustness.png", "closed_loop_fmus.png",
+                 "gain_factor_edges.png"):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     data = json.loads((out / "verification.json").read_text())
     names = [c["name"] for c in data["checks"]]
@@ -43,7 +44,7 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
                      "closed_loop_fmus_vs_tf", "paper_gain_box", "robust_stability_fgs_pd",
                      "robust_stability_x4_fgs_pd", "robust_stability_x4_pid",
                      "robust_steady_state_pd", "robust_steady_state_pid",
-                     "routh_gives_paper_bounds"):
+                     "routh_gives_paper_bounds", "fgs_pd_overshoot_vs_pid"):
         assert required in names, required
     for check in data["checks"]:
         assert set(check) >= {"name", "requirement", "measured", "passed", "verdict", "why"}
@@ -59,6 +60,11 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     assert "## The PD form" in markdown and "|z|" not in markdown.split("## The PD form")[1]
     assert "![" in markdown and "](stability_region.png)" in markdown
     assert str(out) not in markdown
+    # The largest stable plant-gain factor, and every warning, stated in the text.
+    assert "FGS-PD corners (weakest corner): stable up to x2.61 plant gain at tau x0.5" in markdown
+    assert "### Failures and findings a designer must read" in markdown
+    assert "`fgs_pd_overshoot_vs_pid`" in markdown.split("## Figures")[0]
+    assert len(data["figures"]["gain_factor_edges"]["sets"]) == 6
 
 
 def test_plant_fmu_follows_the_tf_within_the_compliance_bound(report):

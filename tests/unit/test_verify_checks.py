@@ -15,6 +15,7 @@ from components.control import DEFAULTS
 from components.plant import PlantParameters
 from orchestrator.verify import WheelLoopModel, controller_cross_check, load_requirements, verify
 from orchestrator.verify import checks as C
+from orchestrator.verify import robust_checks as R
 from orchestrator.verify import measure
 from orchestrator.verify.report import _model_figures
 
@@ -134,7 +135,7 @@ def test_robust_stability_requirement_is_the_gain_margins_6_db():
 def test_robustness_with_the_trim_has_zero_steady_state_error(robust):
     r, _ = robust
     for name in ("fgs_pd", "pd", "pid"):
-        check = C.check_robust_steady_state(r["points"][name], name, REQ["robust_steady_state"])
+        check = R.check_robust_steady_state(r["points"][name], name, REQ["robust_steady_state"])
         assert check.passed, check.measured
         assert check.values["worst_fraction"] < 1e-6  # exactly 0 up to rounding (integral)
 
@@ -142,21 +143,21 @@ def test_robustness_with_the_trim_has_zero_steady_state_error(robust):
 def test_robust_stability_passes_to_x2_and_x4_is_a_finding_for_the_paper_box(robust):
     r, edges = robust
     for name in ("fgs_pd", "pd", "pid"):
-        check = C.check_robust_stability(r["points"][name], edges, name, REQ["robust_stability"])
+        check = R.check_robust_stability(r["points"][name], edges, name, REQ["robust_stability"])
         assert check.passed, check.measured
         assert check.values["points"] == 12 and check.values["at_time_constant_factor"] == 0.5
-    worst = C.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd",
+    worst = R.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd",
                                      REQ["robust_stability"]).values
     assert 2.0 < worst["largest_stable_gain_factor"] < 4.0  # 2.61 at (kp 4, kd 2)
     for name, radius in (("fgs_pd", "1.238"), ("pd", "1.064")):
-        finding = C.check_robust_stability_beyond(r["points"][name], edges, name,
+        finding = R.check_robust_stability_beyond(r["points"][name], edges, name,
                                                   REQ["robust_stability_x4"])
         assert not finding.passed and finding.verdict == "warning"
         assert ("UNSTABLE on a wheel with 4x the DC gain and half the time constant; retune "
                 "for such a motor") in finding.measured
         assert f"gain x4, tau x0.5: max|z| {radius}" in finding.measured
         assert finding.values["largest_stable_gain_factor"]["0.5"] < 4.0
-    pid = C.check_robust_stability_beyond(r["points"]["pid"], edges, "pid",
+    pid = R.check_robust_stability_beyond(r["points"]["pid"], edges, "pid",
                                           REQ["robust_stability_x4"])
     assert pid.passed and pid.values["largest_stable_gain_factor"]["0.5"] > 4.0
 
@@ -166,7 +167,7 @@ def test_robust_stability_fails_for_a_gain_set_unstable_inside_x2(model):
     settings = _settings(pd_kd=5.0)
     r = measure.robustness(model, settings, *GRID, controllers=("pd",))
     edges = measure.gain_factor_edges(model, settings, GRID[1], controllers=("pd",))
-    check = C.check_robust_stability(r["points"]["pd"], edges, "pd", REQ["robust_stability"])
+    check = R.check_robust_stability(r["points"]["pd"], edges, "pd", REQ["robust_stability"])
     assert not check.passed and "gain x2, tau x0.5" in check.measured
     assert check.values["largest_stable_gain_factor"] < 2.0
 
@@ -175,12 +176,12 @@ def test_robust_stability_fails_when_the_requirement_asks_more_or_the_edge_is_sh
     r, edges = robust
     # x3 is not on the evaluated grid: the exact edge (2.61 at tau x0.5) still catches it.
     more = dict(REQ["robust_stability"], gain_factors=[0.25, 0.5, 1.0, 2.0, 3.0])
-    assert not C.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd", more).passed
-    assert C.check_robust_stability(r["points"]["pid"], edges, "pid", more).passed  # 4.10
+    assert not R.check_robust_stability(r["points"]["fgs_pd"], edges, "fgs_pd", more).passed
+    assert R.check_robust_stability(r["points"]["pid"], edges, "pid", more).passed  # 4.10
     # An edge below x2 between the grid's points fails although every grid point is stable.
     short = copy.deepcopy(edges)
     short["sets"][-1]["edges"][1]["upper"] = 1.9
-    assert not C.check_robust_stability(r["points"]["pid"], short, "pid",
+    assert not R.check_robust_stability(r["points"]["pid"], short, "pid",
                                         REQ["robust_stability"]).passed
 
 
@@ -189,13 +190,13 @@ def test_x4_finding_flips_for_a_stronger_pid_and_clears_when_the_controller_is_r
     r = measure.robustness(model, strong, [4.0], [0.5], controllers=("pid",))
     edges = measure.gain_factor_edges(model, strong, [0.5], controllers=("pid",))
     req = dict(REQ["robust_stability_x4"], time_constant_factors=[0.5])
-    assert not C.check_robust_stability_beyond(r["points"]["pid"], edges, "pid", req).passed
+    assert not R.check_robust_stability_beyond(r["points"]["pid"], edges, "pid", req).passed
     # Retuned for a motor with 4x the DC gain: volts_per_speed a quarter, the same loop again.
     settings = _settings(volts_per_speed=DEFAULTS["volts_per_speed"] / 4)
     retuned = WheelLoopModel(volts_per_speed=settings["volts_per_speed"])
     r = measure.robustness(retuned, settings, [4.0], [0.5], controllers=("fgs_pd",))
     edges = measure.gain_factor_edges(retuned, settings, [0.5], controllers=("fgs_pd",))
-    check = C.check_robust_stability_beyond(r["points"]["fgs_pd"], edges, "fgs_pd", req)
+    check = R.check_robust_stability_beyond(r["points"]["fgs_pd"], edges, "fgs_pd", req)
     assert check.passed
     assert check.values["largest_stable_gain_factor"]["0.5"] == pytest.approx(4 * 2.6117,
                                                                               rel=1e-3)
@@ -209,11 +210,11 @@ def test_robust_steady_state_flips_without_the_trim_and_matches_the_analytic_val
     a, kp = 0.25, DEFAULTS["pd_kp"]
     assert pure["steady_state_error"] == pytest.approx(1 - a * (1 + kp) / (1 + a * kp),
                                                        rel=1e-9)
-    check = C.check_robust_steady_state([pure], "pd", REQ["robust_steady_state"])
+    check = R.check_robust_steady_state([pure], "pd", REQ["robust_steady_state"])
     assert not check.passed
     no_integral = measure.robustness(model, _settings(pid_ki=0.0), [0.25], [1.0],
                                      controllers=("pid",))["points"]["pid"]
-    assert not C.check_robust_steady_state(no_integral, "pid", REQ["robust_steady_state"]).passed
+    assert not R.check_robust_steady_state(no_integral, "pid", REQ["robust_steady_state"]).passed
 
 
 def test_robust_stability_flips_for_the_pid_with_gains_past_the_edge(model):
@@ -221,7 +222,7 @@ def test_robust_stability_flips_for_the_pid_with_gains_past_the_edge(model):
     r = measure.robustness(model, wild, [1.0, 2.0], [1.0], controllers=("pid",))
     edges = measure.gain_factor_edges(model, wild, [1.0], controllers=("pid",))
     req = dict(REQ["robust_stability"], time_constant_factors=[1.0])
-    assert not C.check_robust_stability(r["points"]["pid"], edges, "pid", req).passed
+    assert not R.check_robust_stability(r["points"]["pid"], edges, "pid", req).passed
 
 
 def test_routh_finding_says_no_end_of_the_box_is_a_routh_bound(model):
@@ -237,6 +238,22 @@ def test_routh_finding_says_no_end_of_the_box_is_a_routh_bound(model):
     kd_lo, kd_hi = finding["sampled_kd"][0]["intervals"][0]
     box = _settings(kp_min=1.0, kp_max=kp_hi, kd_min=abs(kd_lo), kd_max=kd_hi)
     assert C.check_routh_gives_paper_bounds(finding, box, REQ["routh_gives_paper_bounds"]).passed
+
+
+def test_overshoot_finding_reports_the_case1_numbers_and_flips_for_a_worse_pid():
+    req = REQ["fgs_pd_overshoot_vs_pid"]
+    case1 = measure.paper_case1(_settings())
+    check = C.check_fgs_pd_overshoot_vs_pid(case1, 1.18, req)
+    assert not check.passed and check.verdict == "warning"
+    assert "does not support the paper's claim" in check.measured
+    # The numbers docs/control.md and the strict xfails of test_control_closed_loop.py quote.
+    assert check.values["fgs_pd_pct"] == pytest.approx([2.61, 4.44], abs=0.01)
+    assert check.values["pid_pct"] == pytest.approx([2.19, 3.30], abs=0.01)
+    assert check.values["fgs_pd_pure_pct"] == pytest.approx([1.63, 3.35], abs=0.01)
+    # A CPID with ten times the integral gain overshoots more: the claim then holds.
+    worse = measure.paper_case1(_settings(pid_ki=5.0))
+    check = C.check_fgs_pd_overshoot_vs_pid(worse, 1.18, req)
+    assert check.passed and check.values["pid_pct"][0] > check.values["fgs_pd_pct"][0]
 
 
 def test_exit_status_counts_failures_and_strict_counts_warnings():
@@ -256,7 +273,7 @@ def test_cli_exit_status_is_the_number_of_failed_checks(tmp_path, capsys):
     warnings = {c["name"] for c in data["checks"] if c["verdict"] == "warning"}
     assert status == len(failed) == data["summary"]["exit_status"] == 0
     assert warnings == {"robust_stability_x4_fgs_pd", "robust_stability_x4_pd",
-                        "routh_gives_paper_bounds"}
+                        "routh_gives_paper_bounds", "fgs_pd_overshoot_vs_pid"}
     assert "warning robust_stability_x4_fgs_pd" in capsys.readouterr().out
     strict = main(["verify", "--no-fmu", "--grid", "2", "--strict", "--out", str(tmp_path)])
     assert strict == len(failed) + len(warnings)
