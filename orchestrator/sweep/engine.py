@@ -62,6 +62,24 @@ def _pool_context():
     return multiprocessing.get_context("spawn")
 
 
+class _QueuedPool:
+    """The worker pool as Dask's local scheduler sees it: with twice as many slots as workers.
+
+    :func:`dask.multiprocessing.get` keeps at most ``pool._max_workers`` tasks submitted, and
+    submits the next only after it has taken a result and run the callbacks (the sweep's table
+    write, with its fsyncs). With one task queued per worker beyond the one it runs, a worker
+    that finishes takes the next task at once instead of waiting for that round trip; workers
+    still take queued tasks in order as they become free, so the load stays balanced.
+    """
+
+    def __init__(self, pool, workers):
+        self._pool = pool
+        self._max_workers = 2 * workers
+
+    def submit(self, function, *args, **kwargs):
+        return self._pool.submit(function, *args, **kwargs)
+
+
 class LocalEngine:
     """Runs tasks on Dask's local process scheduler over a kept pool of worker processes.
 
@@ -140,8 +158,8 @@ class LocalEngine:
             self._ran = True
             graph = {key: (function, task) for key, task in remaining.items()}
             try:
-                get(graph, list(graph), pool=self._pool, chunksize=1,
-                    callbacks=[(None, None, None, posttask, None)])
+                get(graph, list(graph), pool=_QueuedPool(self._pool, self.workers),
+                    chunksize=1, callbacks=[(None, None, None, posttask, None)])
             except BrokenProcessPool:
                 self._drop_pool()
                 for key in list(remaining):
