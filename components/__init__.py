@@ -5,3 +5,15 @@ Sub-packages: ``common`` (errors, state snapshots, the shared slave base), ``pla
 imports (``from ..common import errors``), so that ``sonotrack build`` can copy it into an FMU
 under a private package name and the FMU runs without this repository installed.
 """
+
+__all__ = ["FMU_PACKAGES"]
+
+# FMU model name -> sub-package whose fmu.py holds the slave class of that name (here, not in
+# orchestrator.build, so that checking a scenario does not import the FMU builder).
+FMU_PACKAGES = {
+    "RobotPlant": "plant",
+    "SoundSource": "source",
+    "AcousticLocalizer": "acoustics",
+    "CurvaturePlanner": "planner",
+    "WheelController": "control",
+}

@@ -22,6 +22,7 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
+from components import FMU_PACKAGES
 from components.common.errors import BuildError
 from orchestrator.fmi_binary import build_tag, install_binary
 from orchestrator.fmu_docs import document_fmu
@@ -34,14 +35,6 @@ __all__ = [
 REPO_ROOT = Path(__file__).resolve().parent.parent
 COMPONENTS = REPO_ROOT / "components"
 
-# FMU model name -> sub-package of components/ whose fmu.py holds the slave class of that name.
-FMU_PACKAGES = {
-    "RobotPlant": "plant",
-    "SoundSource": "source",
-    "AcousticLocalizer": "acoustics",
-    "CurvaturePlanner": "planner",
-    "WheelController": "control",
-}
 
 _STATE_OPTIONS = {"canGetAndSetFMUstate": True, "canSerializeFMUstate": True}
 _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "fmu_*.py.bak")

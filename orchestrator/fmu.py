@@ -24,9 +24,12 @@ from pathlib import Path
 
 from components.common.errors import ConfigError
 
-__all__ = ["FmuInstance", "PortGroup", "extract_once"]
+__all__ = ["FmuInstance", "PortGroup", "extract_once", "model_description"]
 
 _EXTRACTED = {}
+# sha256 of an FMU's bytes -> its parsed, validated model description (see model_description)
+_DESCRIPTIONS = {}
+_DESCRIPTIONS_KEPT = 64
 # componentEnvironment key -> weak reference to the FmuInstance that owns it.
 _ROUTES = {}
 _KEYS = itertools.count(1)
@@ -43,7 +46,11 @@ _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_
 
 def extract_once(path):
     """Return (model description, unpacked folder) of an FMU, unpacked safely into the
-    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process."""
+    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process.
+
+    The folder is named by the digest of the FMU's bytes, so the description parsed for that
+    digest (by :func:`model_description`, e.g. when the system was loaded) is reused.
+    """
     import fmpy
 
     from orchestrator.extract import extract_fmu
@@ -51,8 +58,47 @@ def extract_once(path):
     path = Path(path).resolve()
     if path not in _EXTRACTED:
         unzip_dir = extract_fmu(path)
-        _EXTRACTED[path] = (fmpy.read_model_description(str(unzip_dir)), str(unzip_dir))
+        description = _DESCRIPTIONS.get(unzip_dir.name)
+        if description is None:
+            description = fmpy.read_model_description(str(unzip_dir))
+            _remember(unzip_dir.name, description)
+        _EXTRACTED[path] = (description, str(unzip_dir))
     return _EXTRACTED[path]
+
+
+def model_description(path):
+    """The model description of an ``.fmu`` file, parsed and validated once per content.
+
+    The file is read once and its bytes are both hashed and parsed, so a description is
+    always cached under the digest of the very bytes it came from: a rebuilt FMU has another
+    digest and is parsed anew. fmpy's validation loads the FMI schema on every call (about
+    as long as the parse itself); a run used to pay it twice per FMU (loading the system,
+    then instantiating).
+
+    Raises
+    ------
+    Exception
+        Whatever :func:`fmpy.read_model_description` raises for an unreadable FMU (fmpy
+        raises bare exceptions for invalid XML).
+    """
+    import hashlib
+    import io
+
+    import fmpy
+
+    data = Path(path).read_bytes()
+    digest = hashlib.sha256(data).hexdigest()
+    description = _DESCRIPTIONS.get(digest)
+    if description is None:
+        description = fmpy.read_model_description(io.BytesIO(data))
+        _remember(digest, description)
+    return description
+
+
+def _remember(digest, description):
+    if len(_DESCRIPTIONS) >= _DESCRIPTIONS_KEPT:
+        del _DESCRIPTIONS[next(iter(_DESCRIPTIONS))]   # the oldest
+    _DESCRIPTIONS[digest] = description
 
 
 @dataclass

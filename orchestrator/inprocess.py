@@ -23,7 +23,7 @@ def slave_class(model_name):
     """Import and return the slave class of the FMU ``model_name`` from ``components``."""
     import importlib
 
-    from orchestrator.build import FMU_PACKAGES
+    from components import FMU_PACKAGES
 
     if model_name not in FMU_PACKAGES:
         raise ConfigError(f"no slave for model {model_name!r}; valid: {', '.join(FMU_PACKAGES)}")

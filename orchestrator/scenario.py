@@ -514,7 +514,7 @@ def model_ranges(model_name):
     '[0.1, 1000.0] kg'
     """
     from components.common.ranges import load_ranges
-    from orchestrator.build import FMU_PACKAGES
+    from components import FMU_PACKAGES
 
     part = FMU_PACKAGES.get(model_name)
     return load_ranges(part) if part is not None else None

@@ -131,7 +131,7 @@ def load_system(ssd_path, fmu_dir=None, allow_unconnected=(), allow_outside=Fals
         Listing every problem :func:`check_system` finds, plus FMUs that are missing or cannot
         be read.
     """
-    from fmpy import read_model_description
+    from orchestrator.fmu import model_description
 
     description = read_ssd(ssd_path, allow_outside=allow_outside)
     base = Path(fmu_dir) if fmu_dir is not None else description.directory
@@ -144,7 +144,7 @@ def load_system(ssd_path, fmu_dir=None, allow_unconnected=(), allow_outside=Fals
                 cache[fmu_path] = f"not found at {fmu_path}"
             else:
                 try:
-                    cache[fmu_path] = read_model_description(str(fmu_path))
+                    cache[fmu_path] = model_description(fmu_path)
                 except Exception as error:  # fmpy raises bare Exceptions for invalid XML
                     cache[fmu_path] = f"cannot be read ({fmu_path}: {error})"
         entry = cache[fmu_path]
