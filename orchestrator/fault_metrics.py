@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-__all__ = ["fault_summary_from_csv", "survival", "SLIP_THRESHOLD", "STOPPED_SPEED",
+__all__ = ["fault_columns", "fault_summary", "fault_summary_from_csv", "survival", "SLIP_THRESHOLD", "STOPPED_SPEED",
            "SPEED_MARGIN", "FINAL_TOLERANCE"]
 
 # A tyre that slips more than this is past the peak of a typical rubber-on-floor curve
@@ -43,8 +43,18 @@ def _status_name(code, names):
     return names[code] if 0 <= code < len(names) else f"code {code}"
 
 
+def fault_columns(faults=()):
+    """The recorded columns the fault figures read (``time`` first), for ``faults``."""
+    targets = sorted({target for target, _ in faults})
+    return (["time", "plant.speed", "plant.slip_left", "plant.slip_right",
+             "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
+             "planner.wheel_faults", "planner.odometry_faults",
+             "plant.x", "plant.y", "source.x", "source.y"]
+            + [f"{t}.faults_active" for t in targets])
+
+
 def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
-    """Fault figures of a run (see the module docstring).
+    """Fault figures of a run (see the module docstring), read from its ``results.csv``.
 
     Parameters
     ----------
@@ -63,15 +73,35 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     """
     from orchestrator.results import DEFAULT_CHUNK_ROWS, iter_result_chunks, read_header
 
-    header = set(read_header(path))
+    header = read_header(path)
+    columns = [c for c in fault_columns(faults) if c in header]
+    chunks = iter_result_chunks(path, columns, chunk_rows or DEFAULT_CHUNK_ROWS)
+    return fault_summary(chunks, header, faults, stop_distance)
+
+
+def fault_summary(chunks, recorded, faults=(), stop_distance=0.5):
+    """Fault figures of a run from its rows in successive blocks (one pass, running counts).
+
+    Parameters
+    ----------
+    chunks : iterable of dict of str to numpy.ndarray
+        Successive blocks of rows, each holding every column of :func:`fault_columns` that
+        is in ``recorded``.
+    recorded : collection of str
+        The columns the run recorded.
+    faults : sequence of (str, Fault)
+        The scenario's ``faults``.
+    stop_distance : float
+        The planner's stop distance [m].
+
+    Returns
+    -------
+    dict
+    """
+    header = set(recorded)
     targets = sorted({target for target, _ in faults})
-    wanted = ["time", "plant.speed", "plant.slip_left", "plant.slip_right",
-              "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
-              "planner.wheel_faults", "planner.odometry_faults",
-              "plant.x", "plant.y", "source.x", "source.y"]
-    wanted += [f"{t}.faults_active" for t in targets]
-    columns = [c for c in wanted if c in header]
-    have = set(columns)
+    wanted = fault_columns(faults)
+    have = {c for c in wanted if c in header}
     missing = [c for c in wanted if c not in header]
 
     names = _status_names()
@@ -79,7 +109,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
     active_time = {t: 0.0 for t in targets}
     rejected = min_distance = last_speed = wheel_stops = odometry_stops = None
-    for chunk in iter_result_chunks(path, columns, chunk_rows or DEFAULT_CHUNK_ROWS):
+    for chunk in chunks:
         time = chunk["time"]
         # each row stands for the interval since the previous row
         dt = np.diff(time, prepend=time[0] if previous_time is None else previous_time)

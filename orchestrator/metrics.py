@@ -37,19 +37,27 @@ def distance_to_polyline(points, polyline):
     polyline = np.asarray(polyline, dtype=float)
     if len(polyline) == 1:
         return np.hypot(*(points - polyline[0]).T)
-    a = polyline[:-1]
-    segment = polyline[1:] - a
-    length2 = np.einsum("ij,ij->i", segment, segment)
-    length2 = np.where(length2 > 0, length2, 1.0)
+    ax, ay = polyline[:-1, 0], polyline[:-1, 1]
+    ux, uy = np.diff(polyline[:, 0]), np.diff(polyline[:, 1])
+    length2 = ux * ux + uy * uy
+    length2 = np.where(length2 > 0, length2, 1.0)   # a repeated vertex: its own distance
     result = np.empty(len(points))
-    # in blocks of points, so the (points x segments x 2) temporaries stay a few MB
+    # x and y apart, (points x segments) temporaries in blocks of points: a few MB each, and
+    # about a fifth of the work of (points x segments x 2) arrays and a norm along their axis
     for first in range(0, len(points), _POINT_BLOCK):
         block = points[first:first + _POINT_BLOCK]
-        relative = block[:, None, :] - a[None, :, :]
-        along = np.clip(np.einsum("nij,ij->ni", relative, segment) / length2, 0.0, 1.0)
-        nearest = a[None, :, :] + along[..., None] * segment[None, :, :]
-        result[first:first + _POINT_BLOCK] = np.min(
-            np.linalg.norm(block[:, None, :] - nearest, axis=2), axis=1)
+        dx = block[:, 0, None] - ax
+        dy = block[:, 1, None] - ay
+        along = dx * ux
+        along += dy * uy
+        along /= length2
+        np.clip(along, 0.0, 1.0, out=along)
+        dx -= along * ux
+        dy -= along * uy
+        dx *= dx
+        dy *= dy
+        dx += dy
+        result[first:first + _POINT_BLOCK] = np.sqrt(dx.min(axis=1))
     return result
 
 
