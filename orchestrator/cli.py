@@ -97,6 +97,10 @@ def _cmd_run(args):
         used = ", ".join(f"{k} = {show(v)}" for k, v in sorted(loaded.parameters.items()))
         print(f"  {'parameters':28s} {used}")
     print(f"results: {result.out_dir.resolve()}")
+    if result.plots_error:   # results and summary are complete; the pictures are not
+        print(f"sonotrack run: error: {result.plots_error} (results.csv and summary.json are "
+              f"complete; the summary records this as plots_error)", file=sys.stderr)
+        return 1
     return 0
 
 

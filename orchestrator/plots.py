@@ -54,7 +54,7 @@ def _has(data, *names):
     return all(name in data for name in names)
 
 
-def plot_run(data, out_dir):
+def plot_run(data, out_dir, figures=PLOT_FILES):
     """Write the standard plots of a run and return their paths.
 
     Parameters
@@ -63,13 +63,19 @@ def plot_run(data, out_dir):
         Recorded columns (``time`` and ``instance.port``).
     out_dir : path-like
         Folder for the PNG files.
+    figures : sequence of str
+        Which of :data:`PLOT_FILES` to draw (default all); a figure whose columns were not
+        recorded is left out.
     """
+    unknown = sorted(set(figures) - set(PLOT_FILES))
+    if unknown:
+        raise ValueError(f"unknown plot {', '.join(unknown)}; plots are {', '.join(PLOT_FILES)}")
     plt = _Figures()
     out_dir = Path(out_dir)
     written = []
     t = data["time"]
 
-    if _has(data, "plant.x", "plant.y", "source.x", "source.y"):
+    if "trajectories.png" in figures and _has(data, "plant.x", "plant.y", "source.x", "source.y"):
         fig, ax = plt.subplots(figsize=(6, 7), margins={"left": 0.13, "right": 0.96,
                                                         "bottom": 0.08, "top": 0.94})
         ax.plot(data["source.x"], data["source.y"], label="source (true)", lw=2, color="tab:orange")
@@ -88,7 +94,8 @@ def plot_run(data, out_dir):
         written.append(_save(fig, out_dir / "trajectories.png"))
 
     wheels = [("left", "controller_left"), ("right", "controller_right")]
-    if all(_has(data, f"plant.wheel_speed_{side}") for side, _ in wheels):
+    if "wheel_speeds.png" in figures and all(_has(data, f"plant.wheel_speed_{side}")
+                                             for side, _ in wheels):
         fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
         for ax, (side, controller) in zip(axes, wheels):
             ax.plot(t, data[f"plant.wheel_speed_{side}"], label="measured (encoder)", lw=1)
@@ -103,7 +110,7 @@ def plot_run(data, out_dir):
         fig.suptitle("Wheel speeds and their references")
         written.append(_save(fig, out_dir / "wheel_speeds.png"))
 
-    if all(_has(data, f"{c}.kp", f"{c}.kd") for _, c in wheels):
+    if "gains.png" in figures and all(_has(data, f"{c}.kp", f"{c}.kd") for _, c in wheels):
         fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
         for ax, gain in zip(axes, ("kp", "kd")):
             for side, controller in wheels:
@@ -115,7 +122,8 @@ def plot_run(data, out_dir):
         fig.suptitle("Scheduled controller gains")
         written.append(_save(fig, out_dir / "gains.png"))
 
-    if _has(data, "localizer.distance", "localizer.bearing", "plant.x", "source.x"):
+    if "localizer.png" in figures and _has(data, "localizer.distance", "localizer.bearing",
+                                           "plant.x", "source.x"):
         true_distance, true_bearing = _true_fix(data)
         fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
         valid = data.get("localizer.valid", np.ones_like(t)) > 0.5

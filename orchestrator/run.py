@@ -25,6 +25,7 @@ class RunResult:
     results_csv: Path
     summary_json: Path
     plots: list = field(default_factory=list)
+    plots_error: str | None = None
 
 
 def instance_parameters(system, scenario):
@@ -141,7 +142,10 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     fmu_dir : path-like, optional
         Where the FMUs are, if not beside the ``.ssd``.
     plots : bool
-        Write the PNG plots.
+        Write the PNG plots. Renderer processes get ready while the run steps and draw
+        once the summary is on disk (:mod:`orchestrator.plot_renderer`); the call returns
+        when the PNGs are written. If they cannot be, the run's results stand: the summary's
+        ``plots_error`` and :attr:`RunResult.plots_error` say why (one line).
     algorithm : {"gauss-seidel", "jacobi"}, optional
         Overrides the scenario's ``master``.
     record_interval : float, optional
@@ -181,12 +185,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     RunInterrupted
         If SIGINT or SIGTERM stopped the run (the summary says ``"interrupted"``).
     """
-    from orchestrator.fmu import FmuInstance
-    from orchestrator.master import InstanceSpec, Link, Master
     from orchestrator.outputs import RunFolder
     from orchestrator.plots import PLOT_FILES
     from orchestrator.scenario import load_scenario
-    from orchestrator.stopping import StopSignals
     from orchestrator.system import load_system
 
     if not hasattr(scenario, "stop_time"):
@@ -201,6 +202,27 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         raise ConfigError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
     folder = RunFolder(out_dir, own_files=PLOT_FILES, fsync=sync_summary)
     folder.check()
+    renderer = None
+    if plots:
+        from orchestrator.plot_renderer import PlotRenderer
+
+        renderer = PlotRenderer()   # imports matplotlib on another core while we step
+    try:
+        return _run(scenario, system, parameters, rates, columns, order, backend, handles,
+                    algorithm, record_interval, fsync, folder, progress, renderer)
+    finally:
+        if renderer is not None:
+            renderer.close()
+
+
+def _run(scenario, system, parameters, rates, columns, order, backend, handles, algorithm,
+         record_interval, fsync, folder, progress, renderer):
+    """run_scenario once its inputs are checked and its folder is ready."""
+    from orchestrator.fmu import FmuInstance
+    from orchestrator.master import InstanceSpec, Link, Master
+    from orchestrator.run_metrics import TRACE_COLUMNS, RowTrace
+    from orchestrator.stopping import StopSignals
+
     if backend == "fmi":
         make = handles or FmuInstance
         instances = {name: make(system.component(name).fmu_path, name) for name in order}
@@ -238,7 +260,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         folder.write_summary(summary)
 
     error = None
-    recorder = None
+    recorder = trace = None
     bar = None
     started = wallclock.perf_counter()
     with StopSignals() as stop:
@@ -247,12 +269,18 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
             read_row = _ColumnReader(master, system, columns)
             bar = _progress(steps_total, scenario, progress)
             recorder = _open_recorder(folder.results_csv, columns, fsync)
-            recorder.record(start_time, read_row())
+            trace = RowTrace(columns, steps_total // record_every + 1,
+                             getattr(scenario, "faults", ()))
+            row = read_row()
+            recorder.record(start_time, row)
+            trace.append(start_time, row)
             bar_every = max(1, steps_total // 200)
 
             def on_step(k, t):
                 if k % record_every == 0:
-                    recorder.record(t, read_row())
+                    row = read_row()
+                    recorder.record(t, row)
+                    trace.append(t, row)
                 if bar is not None and k % bar_every == 0:
                     bar.update(bar_every)
                 if stop.received is not None:
@@ -291,29 +319,37 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     })
     if error is None:
         summary.pop("error", None)
-    trace_columns = ("plant.x", "plant.y", "source.x", "source.y")
-    if recorder is not None and recorder.rows > 1 and all(c in columns for c in trace_columns):
-        from orchestrator.metrics import tracking_summary_from_csv
+    if recorder is not None and recorder.rows > 1 and all(c in columns for c in TRACE_COLUMNS):
+        from orchestrator.run_metrics import summary_figures, summary_figures_from_csv
 
         stop_distance = float(parameters.get("planner", {}).get(
             "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
         summary["stop_distance_m"] = stop_distance
-        summary.update(tracking_summary_from_csv(folder.results_csv, stop_distance))
-        from orchestrator.fault_metrics import fault_summary_from_csv
-
-        summary["robustness"] = fault_summary_from_csv(
-            folder.results_csv, getattr(scenario, "faults", ()), stop_distance)
+        faults = getattr(scenario, "faults", ())
+        if error is None and trace.kept and trace.rows == recorder.rows:
+            summary.update(summary_figures(trace, faults, stop_distance))
+        else:   # the file is the record of what a failed or long run kept
+            summary.update(summary_figures_from_csv(folder.results_csv, faults, stop_distance))
         error = _non_finite_metrics(summary, error)
-    folder.write_summary(summary)
-    written = []
     interrupted = summary["status"] == "interrupted"
-    if plots and not interrupted and recorder is not None and recorder.rows > 1:
-        from orchestrator.plots import plot_run
-        from orchestrator.results import read_results
+    drawing = (renderer is not None and not interrupted and recorder is not None
+               and recorder.rows > 1)
+    if drawing:
+        summary["plots"] = "drawing"   # until the PNGs are written (a kill leaves this)
+    folder.write_summary(summary)
+    written, plots_error = [], None
+    if drawing:
+        from orchestrator.plot_renderer import PlotError
 
-        data = read_results(folder.results_csv, max_rows=_PLOT_ROWS)
-        written = plot_run(data, folder.path)
-    result = RunResult(summary, folder.path, folder.results_csv, folder.summary_json, written)
+        try:
+            written = renderer.render(folder.results_csv, folder.path, _PLOT_ROWS)
+        except PlotError as exc:
+            written, plots_error = exc.written, str(exc)
+            summary["plots_error"] = plots_error
+        summary["plots"] = [path.name for path in written]
+        folder.write_summary(summary)
+    result = RunResult(summary, folder.path, folder.results_csv, folder.summary_json, written,
+                       plots_error)
     if interrupted:
         raise RunInterrupted(f"{error}; results so far in {folder.results_csv} (summary "
                              f"status: interrupted)", stop.received)
