@@ -19,9 +19,12 @@ Measured side by side in one run (alternating repetitions, medians reported):
 * in-process: the same slave classes composed without FMI (``backend="in-process"``);
 * ``run_command``: a whole default ``sonotrack run`` command in a fresh process (as a user
   types it, with its progress bar and plots; and with ``--no-plots``), split into start-up
-  (interpreter, imports, argument parsing), set-up (scenario, system, FMU instances),
-  stepping, summary (figures from results.csv, summary.json on disk), plots and exit, each as
-  a share of the command's wall time (timestamps from benchmarks/_run_phases.py).
+  (interpreter, imports, argument parsing), set-up (system, FMU instances, renderers),
+  stepping, summary (figures, summary.json on disk), plots (waiting for the renderer
+  processes) and exit, each as a share of the command's wall time (timestamps from
+  benchmarks/_run_phases.py), with the renderers' overlap; beside it the same command with one
+  renderer and with the plots drawn in-process (what each piece buys), the summary's figures
+  from the kept rows against re-reading results.csv, and the interpreter and import floors.
 
 Writes benchmarks/results/cosim_speed.json.
 
@@ -57,13 +60,25 @@ def run_default(fmu_dir, backend, out):
 
 
 PHASES = ("start-up", "set-up", "stepping", "summary", "plots", "exit")
+# How the command draws its plots (see benchmarks/_run_phases.py); "no-plots" draws none.
+VARIANTS = {"plots": ("default", True), "no_plots": ("default", False),
+            "plots_one_renderer": ("one-renderer", True),
+            "plots_in_process": ("in-process", True)}
 
 
-def run_command_phases(fmu_dir, out, plots=True):
-    """Time one whole ``sonotrack run`` (default scenario) in a fresh process, by phase."""
+def run_command_phases(fmu_dir, out, variant="default", plots=True):
+    """Time one whole ``sonotrack run`` (default scenario) in a fresh process, by phase.
+
+    The phases partition the wall time of the command's own process (they add up to it):
+    start-up (spawn to run_scenario entered), set-up (to the first step; includes spawning
+    the renderers), stepping, summary (last step to the ok summary.json on disk), plots (to
+    run_scenario's return: waiting for the renderers, or drawing in-process, and the
+    summary's rewrite with the plots' names), exit. The renderers' own timestamps say how
+    much of their work overlapped the parent's set-up and stepping.
+    """
     times = Path(str(out) + ".times.json")
     command = [sys.executable, str(Path(__file__).resolve().parent / "_run_phases.py"),
-               str(times), "run", "scenarios/s_curve.toml", "--out", str(out),
+               str(times), variant, "run", "scenarios/s_curve.toml", "--out", str(out),
                "--fmu-dir", str(fmu_dir)] + ([] if plots else ["--no-plots"])
     # as a user's shell runs it: Python caches bytecode (this session's environment turns
     # that off, which would add compiling every module to every command's start-up)
@@ -73,15 +88,80 @@ def run_command_phases(fmu_dir, out, plots=True):
                    stderr=subprocess.DEVNULL, env=environment)
     ended = time.time()
     marks = json.loads(times.read_text())
+    summary_on_disk = min(t for t in marks["summary_writes"] if t >= marks["stepping_done"])
     phases = {
         "start-up": marks["command_started"] - started,
         "set-up": marks["stepping_started"] - marks["command_started"],
         "stepping": marks["stepping_done"] - marks["stepping_started"],
-        "summary": marks["summary_written"] - marks["stepping_done"],
-        "plots": marks["run_returned"] - marks["summary_written"],
+        "summary": summary_on_disk - marks["stepping_done"],
+        "plots": marks["run_returned"] - summary_on_disk,
         "exit": ended - marks["run_returned"],
     }
-    return ended - started, phases
+    renderers = []
+    for renderer in marks.get("renderers", []):
+        if not renderer:
+            continue
+        # the renderer's warm-up (import, a throw-away figure) against the parent's timeline
+        overlap = max(0.0, min(renderer["ready"], marks["stepping_done"])
+                      - max(renderer["started"], marks["command_started"]))
+        renderers.append({
+            "spawn_to_started_s": renderer["started"] - marks["command_started"],
+            "warm_up_s": renderer["ready"] - renderer["started"],
+            "warm_up_overlapping_set_up_and_stepping_s": overlap,
+            "ready_after_summary_on_disk_s": max(0.0, renderer["ready"] - summary_on_disk),
+            "request_after_summary_on_disk_s": renderer["request"] - summary_on_disk,
+            "drawing_s": renderer["done"] - renderer["request"],
+        })
+    return ended - started, phases, renderers
+
+
+def summary_figures_cost(results_csv, repeats):
+    """Seconds to compute the summary's figures of one default run: from the rows kept while
+    recording (:class:`RowTrace`, what run_scenario does) against re-reading results.csv in
+    chunks (what it did); and the cost of keeping the rows (one append per recorded row)."""
+    from orchestrator.results import read_header, read_results
+    from orchestrator.run_metrics import RowTrace, summary_figures, summary_figures_from_csv
+
+    stop = json.loads((Path(results_csv).parent / "summary.json").read_text())["stop_distance_m"]
+    columns = read_header(results_csv)[1:]
+    data = read_results(results_csv)
+    rows = [(t, list(values)) for t, *values in zip(data["time"], *(data[c] for c in columns))]
+    traced, reread, appends = [], [], []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        trace = RowTrace(columns, len(rows))
+        for t, values in rows:
+            trace.append(t, values)
+        appends.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        ours = summary_figures(trace, (), stop)
+        traced.append(time.perf_counter() - started)
+        started = time.perf_counter()
+        reference = summary_figures_from_csv(results_csv, (), stop)
+        reread.append(time.perf_counter() - started)
+    return {"rows": len(rows), "from_kept_rows_s": median(traced),
+            "from_csv_reread_s": median(reread), "keeping_the_rows_s": median(appends),
+            "same_figures": ours == reference}
+
+
+FLOORS = {"interpreter": "pass",
+          "numpy": "import numpy",
+          "numpy_fmpy": "import numpy, fmpy, fmpy.fmi2",
+          "numpy_matplotlib_agg": "import numpy, matplotlib.figure, "
+                                  "matplotlib.backends.backend_agg"}
+
+
+def start_up_floors(repeats):
+    """Wall seconds of fresh interpreters that only import what a run cannot do without
+    (numpy: the FMUs' models; fmpy: the FMI host) or what drawing needs (matplotlib)."""
+    environment = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    walls = {name: [] for name in FLOORS}
+    for _ in range(repeats + 1):   # the first round warms the bytecode and file caches
+        for name, code in FLOORS.items():
+            started = time.perf_counter()
+            subprocess.run([sys.executable, "-c", code], check=True, env=environment)
+            walls[name].append(time.perf_counter() - started)
+    return {name: median(values[1:]) for name, values in walls.items()}
 
 
 def instance_steps(scenario_path):
@@ -256,37 +336,46 @@ def main(argv=None):
         print(f"default scenario run {r + 1}/{args.repeats}: RTF {fmi_rtf[-1]:.1f} (FMI), "
               f"{inprocess_rtf[-1]:.1f} (in-process)", flush=True)
 
-    # Whole commands, with and without plots, alternating; shares are taken per command. One
+    # Whole commands, every variant in turn, interleaved; shares are taken per command. One
     # command first, not counted, so bytecode and the FMU extraction cache exist as they do
     # for a user's second command.
-    run_command_phases(fmu_dir, work / "command_warm_up", True)
-    commands = {"plots": [], "no_plots": []}
+    run_command_phases(fmu_dir, work / "command_warm_up")
+    commands = {name: [] for name in VARIANTS}
     for r in range(args.repeats):
-        for name, plots in (("plots", True), ("no_plots", False)):
-            wall, phases = run_command_phases(fmu_dir, work / f"command_{name}{r}", plots)
-            commands[name].append((wall, phases))
+        for name, (variant, plots) in VARIANTS.items():
+            wall, phases, renderers = run_command_phases(fmu_dir, work / f"command_{name}{r}",
+                                                         variant, plots)
+            commands[name].append((wall, phases, renderers))
             print(f"sonotrack run ({name.replace('_', ' ')}) {r + 1}/{args.repeats}: "
                   f"{wall:.2f} s, " + ", ".join(f"{p} {phases[p]:.2f}" for p in PHASES),
                   flush=True)
 
     def command_record(runs):
-        walls = [wall for wall, _ in runs]
-        shares = {p: median([phases[p] / wall for wall, phases in runs]) for p in PHASES}
-            # the critical path: until summary.json is on disk (plots come after it)
+        walls = [wall for wall, _, _ in runs]
+        shares = {p: median([phases[p] / wall for wall, phases, _ in runs]) for p in PHASES}
+        # the critical path: until summary.json is on disk (plots come after it)
         to_summary = [sum(phases[p] for p in ("start-up", "set-up", "stepping", "summary"))
-                      for _, phases in runs]
-        return {
+                      for _, phases, _ in runs]
+        record = {
             "wall_s": median(walls),
             "to_summary_on_disk_s": median(to_summary),
             "not_stepping_share_to_summary": median([1 - phases["stepping"] / total for
-                                                     (_, phases), total in zip(runs,
-                                                                               to_summary)]),
+                                                     (_, phases, _), total in zip(runs,
+                                                                                  to_summary)]),
             "wall_runs_s": walls,
-            "phases_s": {p: median([phases[p] for _, phases in runs]) for p in PHASES},
+            "phases_s": {p: median([phases[p] for _, phases, _ in runs]) for p in PHASES},
             "phase_shares": shares,
             "not_stepping_share": median([1 - phases["stepping"] / wall
-                                          for wall, phases in runs]),
+                                          for wall, phases, _ in runs]),
         }
+        renderers = [r for _, _, rs in runs for r in rs]
+        if renderers:
+            record["renderers"] = {key: median([r[key] for r in renderers])
+                                   for key in renderers[0]}
+        return record
+
+    summary_costs = summary_figures_cost(work / "command_plots0" / "results.csv", args.repeats)
+    floors = start_up_floors(args.repeats)
 
     single = {}
     cases = {"RobotPlant": ({"voltage_left": 6.0, "voltage_right": 5.0}, 0.02),
@@ -381,16 +470,31 @@ def main(argv=None):
             "command": "sonotrack run scenarios/s_curve.toml --out DIR --fmu-dir DIR "
                        "(progress bar on; stdout and stderr to /dev/null; bytecode caching on; "
                        "after one uncounted command)",
-            "plots": command_record(commands["plots"]),
-            "no_plots": command_record(commands["no_plots"]),
+            **{name: command_record(runs) for name, runs in commands.items()},
+            "summary_figures": summary_costs,
+            "floors_s": floors,
             "not_stepping_share_target": 0.40,
-            "note": "phases from wall-clock timestamps: start-up = process spawn to "
-                    "run_scenario entered (interpreter, imports, parsing; the timing wrapper "
+            "note": "phases from wall-clock timestamps in the command's own process, which "
+                    "partition its wall time: start-up = process spawn to run_scenario entered "
+                    "(interpreter, imports, parsing, the scenario's checks; the timing wrapper "
                     "imports orchestrator.run before parsing, which the CLI does after); set-up "
-                    "= to the first step; summary = last step to the final summary.json on "
-                    "disk; plots = summary on disk to run_scenario's return; exit = to the "
-                    "process's end (printing, interpreter exit). Medians over repeats; shares "
-                    "are medians of per-command shares.",
+                    "= to the first step (system, FMU instances, spawning the renderers); "
+                    "summary = last step to the ok summary.json on disk; plots = from there to "
+                    "run_scenario's return (waiting for the renderers to write the PNGs, or "
+                    "drawing in-process in plots_in_process; and the summary's rewrite naming "
+                    "the plots); exit = to the process's end. not_stepping_share = 1 - stepping "
+                    "/ wall: the share of the command's wall time during which it is not "
+                    "stepping, whatever runs in parallel; the target is judged on it, with "
+                    "plots (the default) and without. renderers: medians over every renderer "
+                    "process of its warm-up (interpreter, numpy, matplotlib, a throw-away "
+                    "figure), the part of it that overlapped the parent's set-up and stepping, "
+                    "how long after the summary it was still warming up, and its drawing. "
+                    "Variants: plots = as shipped (two renderers), plots_one_renderer = one "
+                    "renderer drawing all four figures, plots_in_process = the command "
+                    "before the renderers (matplotlib imported and every figure drawn in its "
+                    "own process after the summary). Medians over repeats; shares are medians "
+                    "of per-command shares. floors_s: fresh interpreters importing only what "
+                    "a run or a drawing cannot do without.",
         },
         "in_process_realtime_factor": median(inprocess_rtf),
         "fmi_over_in_process_wall_ratio": median(fmi_wall) / median(inprocess_wall),
@@ -426,7 +530,7 @@ def main(argv=None):
               f"{single_rate['model_compute_s']:.3f} s; {row['ours_fmi_calls']} FMI calls at "
               f">= {single_rate['fmi_call_floor_us']:.1f} us: stepping speed-up at most "
               f"{row['stepping_speedup_upper_bound']:.2f}x")
-    for name in ("plots", "no_plots"):
+    for name in VARIANTS:
         command = record["run_command"][name]
         print(f"sonotrack run ({name.replace('_', ' ')}): {command['wall_s']:.2f} s; not "
               f"stepping {command['not_stepping_share']:.0%} (target <= 40 %): " +
