@@ -208,7 +208,7 @@ def main():
     no_step["libcosim (from_ssp_file, no step size)"] = (
         f"runs; base step {system.base_step} s from osp:FixedStepAlgorithm")
     no_step["our master (scenario without steps)"] = (
-        "runs; a scenario's base_step defaults to 0.01 s (orchestrator/scenario.py), "
+        "runs; a scenario's base_step defaults to 0.01 s (orchestrator/scenario/schema.py), "
         "not read from the file")
 
     # a connection between connectors with different declared units

@@ -32,7 +32,7 @@ def check_faults(check, name, value):
 
     Parameters
     ----------
-    check : orchestrator.scenario._Checker
+    check : orchestrator.scenario.schema.FieldChecker
         Collects ``(field, message)`` problems of the scenario source.
     name : str
         The field name (``"faults"``).
