@@ -21,7 +21,7 @@ __all__ = [
     "ssv_tag",
     "osp_tag",
     "Problems",
-    "describe_element",
+    "describe",
     "required_attribute",
     "child_elements",
     "first_child",
@@ -69,7 +69,7 @@ class Problems:
                               + "\n".join(f"  {line}" for line in self.lines))
 
 
-def describe_element(node):
+def describe(node):
     qname = etree.QName(node)
     prefix = {v: k for k, v in NSMAP.items()}.get(qname.namespace, "?")
     name = node.get("name")
@@ -79,7 +79,7 @@ def describe_element(node):
 def required_attribute(node, attribute, problems):
     value = node.get(attribute)
     if value is None or value == "":
-        problems.add(node, f"{describe_element(node)}: attribute '{attribute}' is missing")
+        problems.add(node, f"{describe(node)}: attribute '{attribute}' is missing")
     return value
 
 
@@ -99,6 +99,6 @@ def float_attribute(node, attribute, problems):
     try:
         return float(text)
     except ValueError:
-        problems.add(node, f"{describe_element(node)}: {attribute}={text!r} is not a number")
+        problems.add(node, f"{describe(node)}: {attribute}={text!r} is not a number")
         return None
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 from lxml import etree
 
-from ._xml import (Problems, child_elements, describe_element, first_child, required_attribute,
+from ._xml import (Problems, child_elements, describe, first_child, required_attribute,
                    ssd_tag, ssv_tag)
 from .model import PARAMETER_TYPES, SSV_NAMESPACE, ParameterValue
 
@@ -64,7 +64,7 @@ def read_parameter_set(parameter_set, problems, directory=None, allow_outside=Fa
         typed = [child for child in parameter if isinstance(child.tag, str)]
         typed = [child for child in typed if etree.QName(child).namespace == SSV_NAMESPACE]
         if len(typed) != 1 or etree.QName(typed[0]).localname not in PARAMETER_TYPES:
-            problems.add(parameter, f"{describe_element(parameter)}: needs exactly one value element, "
+            problems.add(parameter, f"{describe(parameter)}: needs exactly one value element, "
                                     f"one of {', '.join('ssv:' + t for t in PARAMETER_TYPES)}")
             continue
         type_name = etree.QName(typed[0]).localname
@@ -74,13 +74,13 @@ def read_parameter_set(parameter_set, problems, directory=None, allow_outside=Fa
         if directory is not None and type_name == "String" and names_a_file(text):
             problem = confine(text, directory, allow_outside)[1]
             if problem is not None:
-                problems.add(typed[0], f"{describe_element(parameter)}: {problem}")
+                problems.add(typed[0], f"{describe(parameter)}: {problem}")
                 continue
         try:
             parameters[name] = ParameterValue(type_name, _convert(type_name, text), directory)
         except ValueError as error:
             reason = f" ({error})" if isinstance(error, _OutOfRange) else ""
-            problems.add(typed[0], f"{describe_element(parameter)}: value {text!r} is not a valid "
+            problems.add(typed[0], f"{describe(parameter)}: value {text!r} is not a valid "
                                    f"ssv:{type_name}{reason}")
     return parameters
 

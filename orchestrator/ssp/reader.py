@@ -14,7 +14,7 @@ from lxml import etree
 
 from components.common.errors import ConfigError
 
-from ._xml import (Problems, child_elements, describe_element, first_child, float_attribute,
+from ._xml import (Problems, child_elements, describe, first_child, float_attribute,
                    osp_tag, required_attribute, ssc_tag, ssd_tag, ssv_tag)
 from .model import (BASE_UNIT_ATTRIBUTES, CONNECTOR_KINDS, CONNECTOR_TYPES, FMU_TYPE,
                     OSP_ANNOTATION_TYPE, SSC_NAMESPACE, SSD_NAMESPACE, STEP_SIZE_HINT_MAX,
@@ -28,13 +28,13 @@ def _read_connector(connector, problems):
     name = required_attribute(connector, "name", problems)
     kind = required_attribute(connector, "kind", problems)
     if kind is not None and kind not in CONNECTOR_KINDS:
-        problems.add(connector, f"{describe_element(connector)}: kind {kind!r} is not one of "
+        problems.add(connector, f"{describe(connector)}: kind {kind!r} is not one of "
                                 f"{', '.join(CONNECTOR_KINDS)}")
     typed = [child for child in connector if isinstance(child.tag, str)
              and etree.QName(child).namespace == SSC_NAMESPACE
              and etree.QName(child).localname in CONNECTOR_TYPES]
     if len(typed) != 1:
-        problems.add(connector, f"{describe_element(connector)}: needs exactly one type element, one of "
+        problems.add(connector, f"{describe(connector)}: needs exactly one type element, one of "
                                 f"{', '.join('ssc:' + t for t in CONNECTOR_TYPES)}")
         return None
     if name is None or kind is None:
@@ -51,7 +51,7 @@ def _read_step_size_hint(annotations, problems):
         if hint is not None:
             value = float_attribute(hint, "value", problems)
             if value is not None and not 0.0 < value <= STEP_SIZE_HINT_MAX:
-                problems.add(hint, f"{describe_element(hint)}: value={hint.get('value')!r} is not a "
+                problems.add(hint, f"{describe(hint)}: value={hint.get('value')!r} is not a "
                                    f"step size in (0, {STEP_SIZE_HINT_MAX!r}] s")
                 return None
             return value
@@ -75,7 +75,7 @@ def _read_component(node, directory, problems, allow_outside=False):
     source = required_attribute(node, "source", problems)
     kind = node.get("type", FMU_TYPE)
     if kind != FMU_TYPE:
-        problems.add(node, f"{describe_element(node)}: type {kind!r} is not supported; only {FMU_TYPE}")
+        problems.add(node, f"{describe(node)}: type {kind!r} is not supported; only {FMU_TYPE}")
     connectors = []
     connectors_node = first_child(node, ssd_tag("Connectors"))
     if connectors_node is not None:
@@ -175,7 +175,7 @@ def read_ssd(path, allow_outside=False):
         if not isinstance(element.tag, str):
             continue
         if element.tag != ssd_tag("Component"):
-            problems.add(element, f"{describe_element(element)}: only <ssd:Component> elements are "
+            problems.add(element, f"{describe(element)}: only <ssd:Component> elements are "
                                   f"supported (no nested systems or signal dictionaries)")
             continue
         component = _read_component(element, path.parent, problems, allow_outside)
