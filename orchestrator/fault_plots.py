@@ -25,11 +25,11 @@ def plot_fault_run(data, scenario, path, dpi=80):
     path : path-like
         The PNG file.
     """
-    import matplotlib
+    from matplotlib.patches import Rectangle
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from orchestrator.matplotlib_agg import pyplot
 
+    plt = pyplot()
     t = data["time"]
     active = np.zeros(t.shape, dtype=bool)
     for _, fault in scenario.faults:
@@ -46,8 +46,8 @@ def plot_fault_run(data, scenario, path, dpi=80):
             paths.axvline(fault.magnitude, color="k", lw=3, label="wall")
         if fault.region:
             x0, y0, x1, y1 = fault.region
-            paths.add_patch(matplotlib.patches.Rectangle((x0, y0), x1 - x0, y1 - y0, alpha=0.2,
-                                                         color="tab:cyan", label="mu patch"))
+            paths.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, alpha=0.2,
+                                      color="tab:cyan", label="mu patch"))
     paths.set_aspect("equal", adjustable="datalim")
     paths.set_xlabel("x [m]")
     paths.set_ylabel("y [m]")

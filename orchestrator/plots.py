@@ -22,16 +22,6 @@ PLOT_FILES = ("trajectories.png", "wheel_speeds.png", "gains.png", "localizer.pn
 _MARGINS = {"left": 0.11, "right": 0.97, "bottom": 0.1, "top": 0.9, "hspace": 0.12}
 
 
-def _figure():
-    """pyplot on the Agg backend (for other reports' plots; a run's plots do not use it)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 class _Figures:
     """Makes figures on an Agg canvas without pyplot."""
 
@@ -39,6 +29,9 @@ class _Figures:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
+        from orchestrator.matplotlib_agg import ensure_bundled_fonts
+
+        ensure_bundled_fonts()
         self._canvas = FigureCanvasAgg
         self._figure = Figure
 

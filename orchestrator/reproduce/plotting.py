@@ -7,22 +7,14 @@ A time series over a cell's runs is drawn as its mean with the 95 % interval of 
 import numpy as np
 from scipy import stats
 
+from orchestrator.matplotlib_agg import pyplot
+
 from .statistics import CONFIDENCE
 
-__all__ = ["pyplot", "traces", "band", "paths", "save", "COLOURS"]
+__all__ = ["traces", "band", "paths", "save", "COLOURS"]
 
 COLOURS = {"pid": "tab:red", "fgs_pd": "tab:blue", "curvature": "tab:blue",
            "rotate_then_go": "tab:orange", "source": "tab:green", "ideal": "k"}
-
-
-def pyplot():
-    """matplotlib's pyplot on the Agg backend (no display needed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def traces(runs, column, transform=None):
