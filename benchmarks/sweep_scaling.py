@@ -42,6 +42,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import build_fresh, median, write_result  # noqa: E402
 
+from orchestrator.dask_cluster import start_cluster, stop_cluster  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "scenarios" / "s_curve.toml"
 FMUS = ["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner", "WheelController"]
@@ -122,55 +124,6 @@ def timeline_child(variant, out, fmu_dir, runs, stop_time):
     figures = (serial_breakdown(output["timeline"], started, ended) if variant == "serial"
                else breakdown(output["timeline"], started, ended))
     return {**figures, "cpu_s": cpu, "load_average_1min": load}
-
-
-def _dask():
-    return str(Path(sys.executable).with_name("dask"))
-
-
-def start_cluster(work):
-    """Start a dask scheduler and two workers on 127.0.0.1; return (address, processes, s)."""
-    scheduler_file = work / "scheduler.json"
-    common = {"cwd": work, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL,
-              "env": _environment()}
-    started = time.perf_counter()
-    processes = [subprocess.Popen([_dask(), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                                   "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-                                  **common)]
-    try:
-        deadline = time.monotonic() + 60
-        address = None
-        while address is None:
-            if processes[0].poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError("dask scheduler did not start")
-            try:  # the scheduler does not write its file atomically: wait for whole JSON
-                address = json.loads(scheduler_file.read_text())["address"]
-            except (OSError, ValueError, KeyError):
-                time.sleep(0.1)
-        for _ in range(2):
-            processes.append(subprocess.Popen(
-                [_dask(), "worker", address, "--nthreads", "1", "--no-dashboard",
-                 "--host", "127.0.0.1", "--local-directory", str(work / "dask")], **common))
-        from distributed import Client
-
-        with Client(address, timeout="30s") as client:
-            client.wait_for_workers(2, timeout=90)
-    except BaseException:
-        stop_cluster(processes)
-        raise
-    return address, processes, time.perf_counter() - started
-
-
-def stop_cluster(processes):
-    for process in processes:
-        if process.poll() is None:
-            process.terminate()
-    for process in processes:
-        try:
-            process.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait(timeout=10)
 
 
 def warm_overhead(fmu_dir, work, runs, stop_time):
@@ -283,7 +236,9 @@ def main(argv=None):
     cluster_error = None
     if not args.no_cluster:
         try:
-            cluster = start_cluster(work)
+            started = time.perf_counter()
+            address, processes = start_cluster(work, workers=2, env=_environment())
+            cluster = (address, processes, time.perf_counter() - started)
             print(f"dask scheduler and 2 workers up in {cluster[2]:.2f} s at {cluster[0]}",
                   flush=True)
         except Exception as error:  # reported in the JSON, not hidden

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from orchestrator.build import REPO_ROOT
+from orchestrator.dask_cluster import start_cluster, stop_cluster
 from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
 from orchestrator.sweep import plan_runs, sweep
@@ -189,48 +190,21 @@ def test_a_failed_warm_up_keeps_nothing_and_raises_nothing(fmu_dir, tmp_path):
     assert not scratch.exists()
 
 
-def _dask_cli():
-    return str(Path(sys.executable).with_name("dask"))
-
-
-def _stop(processes):
-    for process in processes:
-        if process.poll() is None:
-            process.terminate()
-    deadline = time.monotonic() + 20
-    for process in processes:
-        try:
-            process.wait(timeout=max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait(timeout=10)
-
-
 def test_a_real_scheduler_and_two_workers_give_the_local_engines_rows(fmu_dir, tmp_path):
     from distributed import Client
 
     base = _short(1.0)
     grid = {"planner.v_cruise": [0.2, 0.3]}
-    scheduler_file = tmp_path / "scheduler.json"
-    common = {"cwd": tmp_path, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL,
-              "env": {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}}
-    processes = [subprocess.Popen(
-        [_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-         "--scheduler-file", str(scheduler_file)], **common)]
+    address, processes = start_cluster(
+        tmp_path, workers=2, env={**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"})
     try:
-        address = _scheduler_address(scheduler_file, processes[0], timeout=60)
         assert address.startswith("tcp://127.0.0.1:")
-        for _ in range(2):
-            processes.append(subprocess.Popen(
-                [_dask_cli(), "worker", address, "--nthreads", "1", "--no-dashboard",
-                 "--host", "127.0.0.1", "--local-directory", str(tmp_path / "dask")], **common))
         with Client(address, timeout="30s") as client:
-            client.wait_for_workers(2, timeout=90)
             assert len(client.scheduler_info()["workers"]) == 2
         on_cluster = sweep(base, grid, tmp_path / "cluster", fmu_dir=fmu_dir, scheduler=address,
                            progress=False)
     finally:
-        _stop(processes)
+        stop_cluster(processes)
     local = sweep(base, grid, tmp_path / "local", fmu_dir=fmu_dir, workers=2, progress=False)
     assert (on_cluster.engine, local.engine) == ("cluster", "local")
     assert [r["status"] for r in on_cluster.rows] == ["ok", "ok"]
@@ -277,18 +251,6 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
         ("static_case1", 1, "ok"), ("static_case1", 2, "ok")]
     assert (second.computed, second.reused) == (1, 2)
     assert second.rows[:2] == first.rows
-
-
-def _scheduler_address(scheduler_file, process, timeout):
-    """The address the scheduler wrote, once the file holds whole JSON (it is not written atomically)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        assert process.poll() is None, "dask scheduler exited"
-        try:
-            return json.loads(scheduler_file.read_text())["address"]
-        except (FileNotFoundError, json.JSONDecodeError, KeyError):
-            time.sleep(0.2)
-    raise AssertionError(f"dask scheduler wrote no address to {scheduler_file} in {timeout} s")
 
 
 def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
