@@ -166,41 +166,21 @@ def documentation_page(model_description, slave_file=None, notes_file=None):
             f"{k} = {v} s" for k, v in experiment.attrib.items()))
 
     port_columns = ["name", "type", Column("unit"), "start", "min", "max", "description"]
-    inputs = [[v["name"], v["type"], v.get("unit", ""), v.get("start", ""),
-               _range(v, "min"), _range(v, "max"), v.get("description", "")]
-              for v in variables if v.get("causality") == "input"]
-    section = report.section("Inputs")
-    section.paragraph("Inputs are held between steps; [min, max] is the valid range where the "
-                      "FMU declares one. A non-finite value is refused: the step returns "
-                      "fmi2Error or fmi2Discard and the log names the port and the value.")
-    if inputs:
-        section.table(port_columns, inputs)
-    else:
-        section.paragraph("No inputs.")
+    _port_section(report, "Inputs", "Inputs are held between steps; [min, max] is the valid "
+                  "range where the FMU declares one. A non-finite value is refused: the step "
+                  "returns fmi2Error or fmi2Discard and the log names the port and the value.",
+                  port_columns, _port_rows(variables, "input"))
     direct = _direct_dependencies(root, variables)
-    outputs = [[v["name"], v["type"], v.get("unit", ""), v.get("start", ""),
-                _range(v, "min"), _range(v, "max"), ", ".join(direct[v["name"]]) or "none",
-                v.get("description", "")]
-               for v in variables if v.get("causality") == "output"]
-    section = report.section("Outputs")
-    section.paragraph("'direct inputs' are the inputs an output depends on without a step "
-                      "(ModelStructure/Outputs); 'none' means the output changes only in "
-                      "fmi2DoStep.")
-    if outputs:
-        section.table(port_columns[:-1] + ["direct inputs", "description"], outputs)
-    else:
-        section.paragraph("No outputs.")
-    parameters = [[v["name"], v["type"], v.get("unit", ""), v.get("start", ""),
-                   _range(v, "min"), _range(v, "max"), v.get("description", "")]
-                  for v in variables if v.get("causality") == "parameter"]
-    section = report.section("Parameters")
-    section.paragraph("Fixed parameters: set them after fmi2Instantiate and before "
-                      "fmi2ExitInitializationMode. 'start' is the default; [min, max] the "
-                      "valid range where the FMU declares one.")
-    if parameters:
-        section.table(port_columns, parameters)
-    else:
-        section.paragraph("No parameters.")
+    _port_section(report, "Outputs", "'direct inputs' are the inputs an output depends on "
+                  "without a step (ModelStructure/Outputs); 'none' means the output changes "
+                  "only in fmi2DoStep.",
+                  port_columns[:-1] + ["direct inputs", "description"],
+                  _port_rows(variables, "output",
+                             lambda v: ", ".join(direct[v["name"]]) or "none"))
+    _port_section(report, "Parameters", "Fixed parameters: set them after fmi2Instantiate and "
+                  "before fmi2ExitInitializationMode. 'start' is the default; [min, max] the "
+                  "valid range where the FMU declares one.",
+                  port_columns, _port_rows(variables, "parameter"))
 
     computes = report.section("What the model computes")
     docstring = _slave_docstring(slave_file, model) if slave_file is not None else ""
@@ -243,6 +223,25 @@ def documentation_page(model_description, slave_file=None, notes_file=None):
         "and Python recorded at build time (override with SONOTRACK_LIBPYTHON and "
         "SONOTRACK_PYTHON, a Python with numpy).")
     return report.render()
+
+
+def _port_rows(variables, causality, extra=None):
+    """Table rows of the variables of one causality: name, type, unit, start, min, max,
+    ``extra(variable)`` if given, description."""
+    return [[v["name"], v["type"], v.get("unit", ""), v.get("start", ""), _range(v, "min"),
+             _range(v, "max"), *([extra(v)] if extra is not None else []),
+             v.get("description", "")]
+            for v in variables if v.get("causality") == causality]
+
+
+def _port_section(report, title, explanation, columns, rows):
+    """A section of ports: what they are, then their table (or "No inputs." and the like)."""
+    section = report.section(title)
+    section.paragraph(explanation)
+    if rows:
+        section.table(columns, rows)
+    else:
+        section.paragraph(f"No {title.lower()}.")
 
 
 def _entry(name):

@@ -44,6 +44,18 @@ def _paper(paper, table, column, speed):
     return dict(zip(paper[table]["v"], paper[table][column])).get(round(speed, 3))
 
 
+def _beside_paper(row, ratios, paper, table, label, speed, columns):
+    """Put the paper's value beside each simulated one of ``row`` and compare the two.
+
+    ``columns`` are ``(key, paper column, unit)``: ``row[key + "_paper"]`` gets the paper's value
+    at ``speed`` from ``paper[table]`` and ``ratios`` a :class:`Comparison` under ``label``.
+    """
+    for key, column, unit in columns:
+        row[f"{key}_paper"] = _paper(paper, table, column, speed)
+        ratios.append(Comparison(label, f"v = {speed:g}", f"{key} [{unit}]",
+                                 row[f"{key}_paper"], row[key]))
+
+
 def motion_tables(analysis, selected, speeds, paper):
     """Tables 1-3 with their claims and paper ratios."""
     tables, claims, ratios = {}, [], []
@@ -74,11 +86,9 @@ def motion_tables(analysis, selected, speeds, paper):
                    "error": est(s, "rotate_then_go", "error_m"),
                    "time": est(s, "rotate_then_go", "arrival_s", 1000.0),
                    "turn": est(s, "rotate_then_go", "turn_deg")}
-            for key, column, unit in (("distance", "distance_m", "m"),
-                                      ("error", "error_m", "m"), ("time", "time_ms", "ms")):
-                row[f"{key}_paper"] = _paper(paper, "table1_without_curvature", column, s)
-                ratios.append(Comparison("Table 1", f"v = {s:g}", f"{key} [{unit}]",
-                                         row[f"{key}_paper"], row[key]))
+            _beside_paper(row, ratios, paper, "table1_without_curvature", "Table 1", s,
+                          (("distance", "distance_m", "m"), ("error", "error_m", "m"),
+                           ("time", "time_ms", "ms")))
             t.rows.append(row)
         t.notes += ["The straight-line distance to (1.5, 1.5) is 2.121 m; the paper's error "
                     "column equals its distance minus 2.000 m in every row.",
@@ -106,12 +116,9 @@ def motion_tables(analysis, selected, speeds, paper):
                    "distance": est(s, "curvature", "distance_m"),
                    "error": est(s, "curvature", "error_m"),
                    "time": est(s, "curvature", "arrival_s", 1000.0)}
-            for key, column, unit in (("radius", "rotation_radius_m", "m"),
-                                      ("distance", "distance_m", "m"),
-                                      ("error", "error_m", "m"), ("time", "time_ms", "ms")):
-                row[f"{key}_paper"] = _paper(paper, "table2_with_curvature", column, s)
-                ratios.append(Comparison("Table 2", f"v = {s:g}", f"{key} [{unit}]",
-                                         row[f"{key}_paper"], row[key]))
+            _beside_paper(row, ratios, paper, "table2_with_curvature", "Table 2", s,
+                          (("radius", "rotation_radius_m", "m"), ("distance", "distance_m", "m"),
+                           ("error", "error_m", "m"), ("time", "time_ms", "ms")))
             t.rows.append(row)
         t.notes += ["Ideal arc to (1.5, 1.5) from (0, 0) facing +y: R = 1.5 m, length 2.356 m. "
                     "The paper's distance is (pi/2) x its radius in every row: a quarter "

@@ -90,6 +90,30 @@ def _paper_value(table, column, case, control):
     return None
 
 
+def _rows(case, conditions, variants):
+    """Each condition and controller of one case of Tables 8-9, with its cell and a row that
+    holds its label columns: ``(ff, mu, control, form, cell, row)``."""
+    for ff, mu in conditions:
+        for control, form in variants:
+            row = {"case": _CASES[case], "control": CONTROLLERS[control],
+                   "condition": _condition(ff, mu, form)}
+            yield ff, mu, control, form, t89_cell(case, control, ff, mu, form), row
+
+
+def _pairs(case, conditions, forms):
+    """Each condition of one case's controller claims: ``(ff, mu, condition, fgs, pid)``,
+    the FGS-PD cell in every form it ran and the PID cell it is paired with."""
+    for ff, mu in conditions:
+        for form in forms:
+            yield (ff, mu, _condition(ff, mu, form), t89_cell(case, "fgs_pd", ff, mu, form),
+                   t89_cell(case, "pid", ff, mu))
+
+
+def _ratio_row(case, control, ff, form):
+    """The row label of a paper ratio of Tables 8-9 (nominal friction only)."""
+    return f"{_CASES[case]}, {CONTROLLERS[control]}, {_FF[ff]}{_FORM[form]}"
+
+
 def _better(analysis, source, claim, key, unit, fgs, pid, condition, paper_text,
             margin=BETTER_MARGIN, reason=""):
     reference = analysis.estimate(pid, key)
@@ -98,6 +122,17 @@ def _better(analysis, source, claim, key, unit, fgs, pid, condition, paper_text,
                  f"mean paired difference {key}(CFGS-PD) - {key}(CPID)",
                  analysis.difference(fgs, pid, key), threshold, "below", unit, paper_text,
                  reason)
+
+
+def _fgs_lower(analysis, source, what, key, printed, column, case, ff, mu, condition, fgs,
+               pid):
+    """The claim of Tables 8-9 that CFGS-PD has a lower ``what`` (``key``, in m) than CPID,
+    beside the paper's two printed values (``printed[column]``)."""
+    return _better(analysis, source, f"{_CASES[case]}: CFGS-PD has a lower {what} than CPID",
+                   key, "m", fgs, pid, condition,
+                   f"{_paper_value(printed, column, case, 'fgs_pd')} vs "
+                   f"{_paper_value(printed, column, case, 'pid')}",
+                   reason=_controller_reason(ff, mu))
 
 
 def controller_tables(analysis, selected, paper):
@@ -116,39 +151,26 @@ def controller_tables(analysis, selected, paper):
                    ("time_paper", "paper", ".2f"), ("error", "error [m] sim", ".3f"),
                    ("error_paper", "paper", ".3f"), ("slip", "peak slip ratio", ".3f")])
         for case in _CASES:
-            for ff, mu in conditions:
-                for control, form in variants:
-                    cell = t89_cell(case, control, ff, mu, form)
-                    row = {"case": _CASES[case], "control": CONTROLLERS[control],
-                           "condition": _condition(ff, mu, form),
-                           "distance": analysis.estimate(cell, "distance_m"),
-                           "time": analysis.estimate(cell, "arrival_s"),
-                           "error": analysis.estimate(cell, "error_m"),
-                           "slip": analysis.estimate(cell, "peak_slip")}
-                    for key, column, unit in (("distance", "distance_m", "m"),
-                                              ("time", "time_s", "s"),
-                                              ("error", "error_m", "m")):
-                        row[f"{key}_paper"] = _paper_value(printed, column, case, control)
-                        if mu == "mu_nominal":
-                            ratios.append(Comparison(
-                                "Table 8", f"{_CASES[case]}, {CONTROLLERS[control]}, "
-                                f"{_FF[ff]}{_FORM[form]}", f"{key} [{unit}]",
-                                row[f"{key}_paper"], row[key]))
-                    t.rows.append(row)
-            for ff, mu in conditions:
-                for form in forms:
-                    fgs, pid = (t89_cell(case, "fgs_pd", ff, mu, form),
-                                t89_cell(case, "pid", ff, mu))
-                    claims.append(_better(
-                        analysis, "Table 8", f"{_CASES[case]}: CFGS-PD has a lower final "
-                        "error than CPID", "error_m", "m", fgs, pid, _condition(ff, mu, form),
-                        f"{_paper_value(printed, 'error_m', case, 'fgs_pd')} vs "
-                        f"{_paper_value(printed, 'error_m', case, 'pid')}",
-                        reason=_controller_reason(ff, mu)))
-                    claims.append(_better(
-                        analysis, "Sec. 4.1 / 7", f"{_CASES[case]}: CFGS-PD makes the wheels "
-                        "slip less than CPID (peak slip ratio)", "peak_slip", "", fgs, pid,
-                        _condition(ff, mu, form), "(text only)", reason=_SLIP_REASON))
+            for ff, mu, control, form, cell, row in _rows(case, conditions, variants):
+                row.update({"distance": analysis.estimate(cell, "distance_m"),
+                            "time": analysis.estimate(cell, "arrival_s"),
+                            "error": analysis.estimate(cell, "error_m"),
+                            "slip": analysis.estimate(cell, "peak_slip")})
+                for key, column, unit in (("distance", "distance_m", "m"),
+                                          ("time", "time_s", "s"), ("error", "error_m", "m")):
+                    row[f"{key}_paper"] = _paper_value(printed, column, case, control)
+                    if mu == "mu_nominal":
+                        ratios.append(Comparison("Table 8", _ratio_row(case, control, ff, form),
+                                                 f"{key} [{unit}]", row[f"{key}_paper"],
+                                                 row[key]))
+                t.rows.append(row)
+            for ff, mu, condition, fgs, pid in _pairs(case, conditions, forms):
+                claims.append(_fgs_lower(analysis, "Table 8", "final error", "error_m",
+                                         printed, "error_m", case, ff, mu, condition, fgs, pid))
+                claims.append(_better(
+                    analysis, "Sec. 4.1 / 7", f"{_CASES[case]}: CFGS-PD makes the wheels "
+                    "slip less than CPID (peak slip ratio)", "peak_slip", "", fgs, pid,
+                    condition, "(text only)", reason=_SLIP_REASON))
         t.notes += ["Scenarios static_case1.toml and dynamic_case2.toml with planner "
                     "stop_distance 0 (the paper's robot drives to the target). Error: "
                     "distance to the (second) target at the end of the 12 s run.",
@@ -161,29 +183,18 @@ def controller_tables(analysis, selected, paper):
                    ("rmse_paper", "paper", ".4f"),
                    ("rmse_speed", "wheel-speed RMS error [m/s]", ".4f")])
         for case in _CASES:
-            for ff, mu in conditions:
-                for control, form in variants:
-                    cell = t89_cell(case, control, ff, mu, form)
-                    row = {"case": _CASES[case], "control": CONTROLLERS[control],
-                           "condition": _condition(ff, mu, form),
-                           "rmse": analysis.estimate(cell, "rmse_path_m"),
-                           "rmse_paper": _paper_value(rmse_printed, "rmse", case, control),
-                           "rmse_speed": analysis.estimate(cell, "rmse_speed_m_s")}
-                    if mu == "mu_nominal":
-                        ratios.append(Comparison(
-                            "Table 9", f"{_CASES[case]}, {CONTROLLERS[control]}, "
-                            f"{_FF[ff]}{_FORM[form]}", "RMSE [m]", row["rmse_paper"],
-                            row["rmse"]))
-                    t.rows.append(row)
-            for ff, mu in conditions:
-                for form in forms:
-                    claims.append(_better(
-                        analysis, "Table 9", f"{_CASES[case]}: CFGS-PD has a lower path RMSE "
-                        "than CPID", "rmse_path_m", "m", t89_cell(case, "fgs_pd", ff, mu, form),
-                        t89_cell(case, "pid", ff, mu), _condition(ff, mu, form),
-                        f"{_paper_value(rmse_printed, 'rmse', case, 'fgs_pd')} vs "
-                        f"{_paper_value(rmse_printed, 'rmse', case, 'pid')}",
-                        reason=_controller_reason(ff, mu)))
+            for ff, mu, control, form, cell, row in _rows(case, conditions, variants):
+                row.update({"rmse": analysis.estimate(cell, "rmse_path_m"),
+                            "rmse_paper": _paper_value(rmse_printed, "rmse", case, control),
+                            "rmse_speed": analysis.estimate(cell, "rmse_speed_m_s")})
+                if mu == "mu_nominal":
+                    ratios.append(Comparison("Table 9", _ratio_row(case, control, ff, form),
+                                             "RMSE [m]", row["rmse_paper"], row["rmse"]))
+                t.rows.append(row)
+            for ff, mu, condition, fgs, pid in _pairs(case, conditions, forms):
+                claims.append(_fgs_lower(analysis, "Table 9", "path RMSE", "rmse_path_m",
+                                         rmse_printed, "rmse", case, ff, mu, condition, fgs,
+                                         pid))
         t.notes.append("The paper does not define Table 9's RMSE; it follows Fig. 17 "
                        "(trajectories) and Table 3 (path RMSE), so it is set beside our path "
                        "RMSE from the ideal arc(s). The wheel-speed RMS error has no paper "
