@@ -119,3 +119,30 @@ def test_a_bad_cache_bound_is_refused_with_its_name(cache, monkeypatch, name, te
     monkeypatch.setenv(name, text)
     with pytest.raises(ConfigError, match=f"{name}={text!r}: expected a positive number"):
         cache_limits()
+
+
+_USER = """
+import sys, time
+from orchestrator.extract import extract_fmu
+for path in sys.argv[1:]:
+    folder = extract_fmu(path)
+    time.sleep(0.05)   # others prune meanwhile
+    text = (folder / "resources" / "data.txt").read_text().strip()
+    assert text == path.rsplit("/", 1)[1][:-4], (text, path)
+    assert (folder / "binaries" / "linux64" / "model.so").stat().st_size >= 104
+print("ok")
+"""
+
+
+def test_concurrent_users_and_pruners_never_see_a_missing_entry(cache, tmp_path):
+    fmus = [str(_fmu(tmp_path / f"m{n}.fmu", bytes([n]))) for n in range(4)]
+    for wave in range(3):
+        children = [subprocess.Popen([sys.executable, "-c", _USER,
+                                      *(fmus[(wave + k + j) % 4] for j in range(3))],
+                                     env=_env(fmus=1), stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True) for k in range(6)]
+        for child in children:
+            out, err = child.communicate(timeout=120)
+            assert child.returncode == 0 and out.strip() == "ok", err
+    assert len(_entries(cache)) >= 1
+    assert not list((cache / "fmus").glob(".pruned-*"))
