@@ -52,7 +52,7 @@ __all__ = ["MAX_UNPACKED_BYTES", "MAX_CACHED_FMUS", "MAX_CACHED_BYTES", "cache_d
 
 MAX_UNPACKED_BYTES = 256 * 2**20
 MAX_ENTRIES = 10_000
-# Cache bounds: a sweep uses six FMUs, so 32 entries keep about five builds; 2 GiB holds eight
+# Cache bounds: a run uses five FMU files, so 32 entries keep about six builds; 2 GiB holds eight
 # FMUs at the 256 MiB unpacking cap (ours unpack to about 0.5 MB each).
 MAX_CACHED_FMUS = 32
 MAX_CACHED_BYTES = 2 * 2**30
