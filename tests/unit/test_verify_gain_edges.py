@@ -1,7 +1,7 @@
 """The largest stable plant-DC-gain factor against independent references.
 
 References: numeric roots of the characteristic polynomial of a loop model rebuilt from
-scratch (ZOH, encoder window) at the found factor times (1 -+ 1e-6); python-control's gain
+scratch (ZOH, encoder window) at the found factor -+ 1e-6; python-control's gain
 margin (at time constant x1 a plant-gain factor is the whole controller scaled); and two
 closed forms derived here for a first-order wheel under pure P control.
 """
@@ -52,8 +52,8 @@ def test_edge_is_where_the_roots_leave_the_unit_circle(model, name, kp, kd, ki, 
     edge = largest_stable_gain_factor(model, kp, kd, ki, tau)
     assert edge["nominal_stable"] and edge["upper_found"]
     g = edge["upper"]
-    assert _radius(model, g * (1 - 1e-6), tau, kp, kd, ki) < 1.0
-    assert _radius(model, g * (1 + 1e-6), tau, kp, kd, ki) > 1.0
+    assert _radius(model, g - 1e-6, tau, kp, kd, ki) < 1.0
+    assert _radius(model, g + 1e-6, tau, kp, kd, ki) > 1.0
     assert edge["upper_relative_difference"] < 1e-9  # Routh (w-plane) agrees
     # No lower edge: the loop only gets slower as the plant's gain falls.
     assert not edge["lower_found"] and edge["lower"] == pytest.approx(GAIN_FACTOR_SEARCH[0])
