@@ -63,18 +63,19 @@ def _pool_context():
 
 
 class _QueuedPool:
-    """The worker pool as Dask's local scheduler sees it: with twice as many slots as workers.
+    """The worker pool as Dask's local scheduler sees it: with ``slots`` task slots.
 
     :func:`dask.multiprocessing.get` keeps at most ``pool._max_workers`` tasks submitted, and
     submits the next only after it has taken a result and run the callbacks (the sweep's table
     write, with its fsyncs). With one task queued per worker beyond the one it runs, a worker
     that finishes takes the next task at once instead of waiting for that round trip; workers
-    still take queued tasks in order as they become free, so the load stays balanced.
+    still take queued tasks in order as they become free, so the load stays balanced. (One
+    slot: one task at a time, to find which task kills its worker.)
     """
 
-    def __init__(self, pool, workers):
+    def __init__(self, pool, slots):
         self._pool = pool
-        self._max_workers = 2 * workers
+        self._max_workers = slots
 
     def submit(self, function, *args, **kwargs):
         return self._pool.submit(function, *args, **kwargs)
@@ -138,9 +139,11 @@ class LocalEngine:
     def run(self, function, tasks, on_result):
         """Run ``function(task)`` for each ``(key, task)``; ``on_result(key, result)`` as each ends.
 
-        A worker process that dies (a crash in native code) breaks the pool: a new pool takes
-        the unfinished tasks, and a task that was unfinished at two such breaks is reported
-        as failed instead of being tried again.
+        A worker process that dies (a crash in native code) breaks the pool, and the tasks
+        sent out but unfinished then (running, or queued behind a running one) are suspects:
+        a new pool runs each suspect alone, then the other tasks as before. A task whose
+        worker died while it ran alone, twice, is reported as failed instead of being tried
+        again; the tasks that merely shared the pool with it are computed.
         """
         from concurrent.futures.process import BrokenProcessPool
 
@@ -148,6 +151,10 @@ class LocalEngine:
 
         remaining = dict(tasks)
         breaks = {key: 0 for key in remaining}
+        suspects, idle_breaks = [], 0
+
+        def pretask(key, dsk, state):
+            sent.add(key)
 
         def posttask(key, result, dsk, state, worker_id):
             remaining.pop(key, None)
@@ -156,18 +163,34 @@ class LocalEngine:
         while remaining:
             self.start()
             self._ran = True
-            graph = {key: (function, task) for key, task in remaining.items()}
+            suspects = [key for key in suspects if key in remaining]
+            alone = suspects[:1]
+            batch = {key: remaining[key] for key in alone or remaining}
+            graph = {key: (function, task) for key, task in batch.items()}
+            sent = set()
             try:
-                get(graph, list(graph), pool=_QueuedPool(self._pool, self.workers),
-                    chunksize=1, callbacks=[(None, None, None, posttask, None)])
+                get(graph, list(graph),
+                    pool=_QueuedPool(self._pool, 1 if alone else 2 * self.workers),
+                    chunksize=1, callbacks=[(None, None, pretask, posttask, None)])
             except BrokenProcessPool:
                 self._drop_pool()
-                for key in list(remaining):
-                    breaks[key] += 1
-                    if breaks[key] >= 2:
+                idle_breaks = idle_breaks + 1 if not sent else 0
+                if idle_breaks >= 2:  # workers that die before any task: nothing can run
+                    for key in list(remaining):
                         remaining.pop(key)
-                        on_result(key, {"status": "failed", "error": "the worker process "
-                                        "running it died (twice); see the run's folder"})
+                        on_result(key, {"status": "failed", "error": "the worker processes "
+                                        "died before running a task (twice)"})
+                    break
+                if not alone:
+                    suspects = [key for key in batch if key in sent and key in remaining]
+                    continue
+                key = alone[0]
+                breaks[key] += 1
+                if breaks[key] >= 2:
+                    remaining.pop(key)
+                    on_result(key, {"status": "failed", "error": "the worker process "
+                                    "running it died (twice, running alone); see the run's "
+                                    "folder"})
             except BaseException:
                 self._drop_pool()
                 raise

@@ -309,3 +309,27 @@ def test_a_relative_csv_in_set_names_the_file_in_the_working_folder(fmu_dir, tmp
     [run] = plan_runs(_short(), {"source.path": ["wp.csv"]}, tmp_path / "out",
                       fmu_dir=fmu_dir)
     assert run.key != before
+
+
+def _die_or_wait(task):
+    """A task for the engine: -1 kills its worker process (as a crash in native code would),
+    any other number waits a little and answers."""
+    if task == -1:
+        os._exit(70)
+    time.sleep(0.3)
+    return {"status": "ok", "task": task}
+
+
+def test_a_task_that_kills_its_worker_fails_alone(tmp_path):
+    from orchestrator.sweep import LocalEngine
+
+    tasks = [("die", -1)] + [(f"run{n}", n) for n in range(5)]
+    results = {}
+    with LocalEngine(workers=2) as engine:
+        engine.run(_die_or_wait, tasks, lambda key, result: results.setdefault(key, result))
+    assert set(results) == {key for key, _ in tasks}
+    assert results["die"]["status"] == "failed"
+    assert "died" in results["die"]["error"]
+    # the runs that shared the pool with it are computed, not blamed for its crash
+    assert {key: r["status"] for key, r in results.items() if key != "die"} == {
+        f"run{n}": "ok" for n in range(5)}
