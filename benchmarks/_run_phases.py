@@ -7,9 +7,10 @@ when the command's ``main`` returns, and ends as the ``sonotrack`` console scrip
 benchmark by itself (``make benchmarks`` skips files starting with ``_``).
 
 VARIANT is ``default`` (sonotrack as shipped: one renderer process, which forks to draw its
-figures on two cores), ``one-renderer`` (the same renderer drawing every figure itself), or ``in-process`` (what the command did before the
-renderers: import matplotlib and draw every figure in its own process once the summary is on
-disk, through the same :func:`orchestrator.plots.plot_run`), so that one run of the benchmark
+figures on two cores), ``one-renderer`` (the same renderer drawing every figure itself), or
+``in-process`` (what the command did before the renderer: import matplotlib and draw every
+figure in its own process once the summary is on disk, through the same
+:func:`orchestrator.plots.plot_run`), so that one run of the benchmark
 measures what each piece buys.
 """
 

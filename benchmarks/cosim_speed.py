@@ -319,6 +319,7 @@ def main(argv=None):
                         help="simulated seconds of the libcosim comparison")
     args = parser.parse_args(argv)
 
+    load_at_start = os.getloadavg()[0]
     fmus = build_fresh(["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner",
                         "WheelController"])
     fmu_dir = next(iter(fmus.values())).parent
@@ -367,6 +368,8 @@ def main(argv=None):
             "phase_shares": shares,
             "not_stepping_share": median([1 - phases["stepping"] / wall
                                           for wall, phases, _ in runs]),
+            # in seconds too: a renderer slowing the stepping down would flatter the share
+            "not_stepping_s": median([wall - phases["stepping"] for wall, phases, _ in runs]),
         }
         renderers = [r for _, _, rs in runs for r in rs]
         if renderers:
@@ -375,7 +378,7 @@ def main(argv=None):
         return record
 
     summary_costs = summary_figures_cost(work / "command_plots0" / "results.csv", args.repeats)
-    floors = start_up_floors(args.repeats)
+    import_floors = start_up_floors(args.repeats)
 
     single = {}
     cases = {"RobotPlant": ({"voltage_left": 6.0, "voltage_right": 5.0}, 0.02),
@@ -458,6 +461,9 @@ def main(argv=None):
 
     record = {
         "scenario": "scenarios/s_curve.toml",
+        # 1-minute load averages when the script started and ended (2 cores: above ~2 means
+        # other processes shared them, and every figure here is slower than on an idle machine)
+        "load_average": [load_at_start, os.getloadavg()[0]],
         "repeats": args.repeats,
         "realtime_factor": median(fmi_rtf),
         "realtime_factor_target": 20.0,
@@ -472,7 +478,7 @@ def main(argv=None):
                        "after one uncounted command)",
             **{name: command_record(runs) for name, runs in commands.items()},
             "summary_figures": summary_costs,
-            "floors_s": floors,
+            "floors_s": import_floors,
             "not_stepping_share_target": 0.40,
             "note": "phases from wall-clock timestamps in the command's own process, which "
                     "partition its wall time: start-up = process spawn to run_scenario entered "
@@ -489,12 +495,16 @@ def main(argv=None):
                     "process of its warm-up (interpreter, numpy, matplotlib, a throw-away "
                     "figure), the part of it that overlapped the parent's set-up and stepping, "
                     "how long after the summary it was still warming up, and its drawing. "
-                    "Variants: plots = as shipped (two renderers), plots_one_renderer = one "
-                    "renderer drawing all four figures, plots_in_process = the command "
-                    "before the renderers (matplotlib imported and every figure drawn in its "
-                    "own process after the summary). Medians over repeats; shares are medians "
-                    "of per-command shares. floors_s: fresh interpreters importing only what "
-                    "a run or a drawing cannot do without.",
+                    "Variants: plots = as shipped (one renderer process, which forks once "
+                    "the summary is on disk to draw two figures per core), plots_one_renderer "
+                    "= the renderer drawing all four figures itself, plots_in_process = the "
+                    "command before the renderer (matplotlib imported and every figure drawn "
+                    "in its own process after the summary). Medians over repeats; shares are "
+                    "medians of per-command shares; not_stepping_s = wall - stepping (a "
+                    "renderer competing with the stepping for a core lengthens the stepping "
+                    "and so lowers the share: compare stepping with no_plots'). floors_s: "
+                    "fresh interpreters importing only what a run or a drawing cannot do "
+                    "without.",
         },
         "in_process_realtime_factor": median(inprocess_rtf),
         "fmi_over_in_process_wall_ratio": median(fmi_wall) / median(inprocess_wall),
