@@ -46,7 +46,8 @@ _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_
 
 def extract_once(path):
     """Return (model description, unpacked folder) of an FMU, unpacked safely into the
-    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process.
+    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process and
+    file version (a file rewritten in place is unpacked again).
 
     The folder is named by the digest of the FMU's bytes, so the description parsed for that
     digest (by :func:`model_description`, e.g. when the system was loaded) is reused.
@@ -56,14 +57,19 @@ def extract_once(path):
     from orchestrator.extract import extract_fmu
 
     path = Path(path).resolve()
-    if path not in _EXTRACTED:
+    stat = path.stat()
+    # a file rebuilt in place (another size, mtime or inode) is unpacked again: reusing the
+    # first folder would run the earlier build's code
+    signature = (stat.st_size, stat.st_mtime_ns, stat.st_ino)
+    cached = _EXTRACTED.get(path)
+    if cached is None or cached[0] != signature:
         unzip_dir = extract_fmu(path)
         description = _DESCRIPTIONS.get(unzip_dir.name)
         if description is None:
             description = fmpy.read_model_description(str(unzip_dir))
             _remember(unzip_dir.name, description)
-        _EXTRACTED[path] = (description, str(unzip_dir))
-    return _EXTRACTED[path]
+        cached = _EXTRACTED[path] = (signature, (description, str(unzip_dir)))
+    return cached[1]
 
 
 def model_description(path):

@@ -87,19 +87,23 @@ class WarmInstances:
         return cached[1]
 
     def system(self, ssd_path, fmu_dir, allow_outside=False):
-        """The loaded system of an ``.ssd`` (kept while the ``.ssd`` file is unchanged)."""
+        """The loaded system of an ``.ssd``, kept while the ``.ssd`` and its FMUs are unchanged
+        (a rebuilt FMU may declare other variables: its model description is read again)."""
         from orchestrator.system import load_system
 
         key = (str(ssd_path), str(fmu_dir), bool(allow_outside))
-        signature = self.file_digest(ssd_path)
         with self._lock:
             cached = self._systems.get(key)
-        if cached is None or cached[0] != signature:
-            cached = (signature, load_system(ssd_path, fmu_dir=fmu_dir,
-                                             allow_outside=allow_outside))
-            with self._lock:
-                self._systems[key] = cached
-        return cached[1]
+        if cached is not None and cached[0] == self._signature(ssd_path, cached[1]):
+            return cached[1]
+        system = load_system(ssd_path, fmu_dir=fmu_dir, allow_outside=allow_outside)
+        with self._lock:
+            self._systems[key] = (self._signature(ssd_path, system), system)
+        return system
+
+    def _signature(self, ssd_path, system):
+        return (self.file_digest(ssd_path),
+                *(self.file_digest(component.fmu_path) for component in system.components))
 
     def acquire(self, instance_name, fmu_path, digest):
         """A warm instance for this run, or a new reusable one."""

@@ -333,3 +333,26 @@ def test_a_task_that_kills_its_worker_fails_alone(tmp_path):
     # the runs that shared the pool with it are computed, not blamed for its crash
     assert {key: r["status"] for key, r in results.items() if key != "die"} == {
         f"run{n}": "ok" for n in range(5)}
+
+
+def test_a_worker_notices_an_fmu_rebuilt_in_place(fmu_dir, tmp_path):
+    import zipfile
+
+    from orchestrator.fmu import extract_once
+
+    for fmu in Path(fmu_dir).glob("*.fmu"):
+        shutil.copy(fmu, tmp_path / fmu.name)
+    shutil.copy(REPO_ROOT / "fmus" / "SystemStructure.ssd", tmp_path)
+    ssd, fmu = tmp_path / "SystemStructure.ssd", tmp_path / "WheelController.fmu"
+    warm = WarmInstances()
+    first = warm.system(ssd, None)
+    assert warm.system(ssd, None) is first
+    _, first_folder = extract_once(fmu)
+    # rebuilt at the same path: another archive (one more file), another digest
+    with zipfile.ZipFile(fmu, "a") as archive:
+        archive.writestr("documentation/rebuilt.txt", "rebuilt")
+    assert warm.system(ssd, None) is not first  # its model descriptions are read again
+    _, folder = extract_once(fmu)
+    # the run uses the new build's files, unpacked under the new content's digest
+    assert folder != first_folder
+    assert Path(folder).name == warm.file_digest(fmu)
