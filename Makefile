@@ -6,10 +6,15 @@ STAMP := $(VENV)/.installed
 FMU_DIR := fmus
 SCENARIO ?= scenarios/s_curve.toml
 
-# sonotrack's FMI 2.0 binary (linux64), compiled against the FMI headers fmpy ships.
+# sonotrack's FMI 2.0 binary (linux64), compiled against the FMI headers fmpy ships from every
+# C source and header in orchestrator/fmi_binary/ (a change to any of them rebuilds it). The
+# library carries the sha256 of those sources; `sonotrack build` refuses one built from others.
 FMI_BINARY := orchestrator/fmi_binary/linux64/sonotrack_fmi2.so
-FMI_SOURCE := orchestrator/fmi_binary/sonotrack_fmi2.c
+FMI_SOURCES := $(wildcard orchestrator/fmi_binary/*.c)
+FMI_HEADERS := $(wildcard orchestrator/fmi_binary/*.h)
 FMI_CC ?= gcc
+FMI_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wformat=2 -Wconversion -Wsign-conversion \
+	-Wmissing-prototypes -Wstrict-prototypes -Wpointer-arith -Wcast-qual -Wundef -Wvla
 
 .PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary tbb
 
@@ -17,11 +22,13 @@ install: $(STAMP)
 
 fmi-binary: $(FMI_BINARY)
 
-$(FMI_BINARY): $(FMI_SOURCE) $(STAMP)
+$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
 	mkdir -p $(dir $@)
-	$(FMI_CC) -std=c11 -O2 -fPIC -shared -Wall -Wextra -Werror -fvisibility=hidden \
-		-I"$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" \
-		-o $@ $(FMI_SOURCE) -ldl -lpthread
+	hash="$$($(BIN)/python -c 'from orchestrator.fmi_binary import source_hash; print(source_hash())')" && \
+	headers="$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" && \
+	$(FMI_CC) -std=c11 -O2 -fPIC -shared $(FMI_WARNINGS) -fvisibility=hidden \
+		-DSONOTRACK_SOURCE_SHA256="\"$$hash\"" -I"$$headers" \
+		-o $@ $(FMI_SOURCES) -ldl -lpthread
 
 # constraints.txt pins every package to the versions the project was tested with.
 $(STAMP): pyproject.toml constraints.txt

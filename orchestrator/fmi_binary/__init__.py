@@ -2,7 +2,8 @@
 
 pythonfmu builds the FMU (model description, resources with the slave's Python code); then
 :func:`install_binary` replaces pythonfmu's ``binaries/linux64/<model>.so`` with the library
-compiled by ``make`` from ``sonotrack_fmi2.c`` and writes ``resources/sonotrack_binding.txt``,
+compiled by ``make`` from the C sources in this folder (:data:`SOURCES`: ``*.c`` and the private
+header ``sonotrack_fmi2.h``) and writes ``resources/sonotrack_binding.txt``,
 the table that library reads at ``fmi2Instantiate``: the GUID, where the slave's code lives, the
 libpython and Python executable of the build (used only by hosts that run no Python) and every
 variable's value reference, type, causality, variability and initial. The win64 binary stays
@@ -11,6 +12,7 @@ pythonfmu's. docs/fmi_binary.md describes the binary's contract.
 
 import hashlib
 import os
+import re
 import sys
 import sysconfig
 import tempfile
@@ -20,13 +22,17 @@ from xml.etree import ElementTree
 
 from components.common.errors import BuildError
 
-__all__ = ["LIBRARY", "SOURCE", "BINDING_FILE", "build_tag", "install_binary", "binding_table",
-           "pythonfmu_binary", "restore_pythonfmu_binary"]
+__all__ = ["LIBRARY", "SOURCES", "BINDING_FILE", "build_tag", "source_hash", "library_source_hash",
+           "install_binary", "binding_table", "pythonfmu_binary", "restore_pythonfmu_binary"]
 
 HERE = Path(__file__).resolve().parent
-SOURCE = HERE / "sonotrack_fmi2.c"
 LIBRARY = HERE / "linux64" / "sonotrack_fmi2.so"
 BINDING_FILE = "resources/sonotrack_binding.txt"
+# What the library is compiled from: every C source and header in this folder (the Makefile
+# compiles the same glob and embeds source_hash() of it in the library).
+SOURCES = tuple(sorted(HERE.glob("*.c")) + sorted(HERE.glob("*.h")))
+# How the library names its sources (the string is in the binary: see instance.c).
+_SOURCE_ID = re.compile(rb"sonotrack-fmi2-sources sha256 ([0-9a-f]{64})\0")
 
 _IGNORED_PARTS = {"__pycache__"}
 
@@ -57,6 +63,28 @@ def build_tag(name, sources):
             digest.update(str(relative).encode() + b"\0")
             digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()[:12]
+
+
+def source_hash(folder=HERE):
+    """Return the sha256 (hex) of the FMI binary's C sources: every ``*.c`` and ``*.h`` in ``folder``.
+
+    ``make`` compiles it into the library, and :func:`install_binary` refuses a library whose
+    embedded hash differs from the sources' (a stale build would put old C code into new FMUs).
+    Each file's name and bytes count, so editing, adding, removing or renaming any source
+    changes it.
+    """
+    folder = Path(folder)
+    digest = hashlib.sha256()
+    for path in sorted(folder.glob("*.c")) + sorted(folder.glob("*.h")):
+        digest.update(path.name.encode() + b"\0")
+        digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def library_source_hash(library=LIBRARY):
+    """Return the source hash compiled into a library, or None if it carries none."""
+    found = _SOURCE_ID.search(Path(library).read_bytes())
+    return found.group(1).decode() if found else None
 
 
 def _python_facts():
@@ -115,8 +143,12 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
     library = Path(library)
     if not library.is_file():
         raise BuildError(f"FMI binary {library} is missing: run `make` (target {library.name})")
-    if library == LIBRARY and library.stat().st_mtime < SOURCE.stat().st_mtime:
-        raise BuildError(f"FMI binary {library} is older than {SOURCE.name}: run `make`")
+    built_from, sources = library_source_hash(library), source_hash()
+    if built_from != sources:
+        recorded = f"sha256 {built_from[:12]}" if built_from else "none recorded"
+        raise BuildError(f"FMI binary {library} was compiled from other C sources ({recorded}) "
+                         f"than {HERE} holds now (sha256 {sources[:12]}): run `make` (target "
+                         f"{library.name})")
     description, identifier = _description(fmu_path)
     table = binding_table(description, package, entry, class_name).encode()
     _rewrite(fmu_path, {f"binaries/linux64/{identifier}.so": library.read_bytes(),
