@@ -13,22 +13,34 @@ FMI_BINARY := orchestrator/fmi_binary/linux64/sonotrack_fmi2.so
 FMI_SOURCES := $(wildcard orchestrator/fmi_binary/*.c)
 FMI_HEADERS := $(wildcard orchestrator/fmi_binary/*.h)
 FMI_CC ?= gcc
+COMMA := ,
 FMI_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wformat=2 -Wconversion -Wsign-conversion \
 	-Wmissing-prototypes -Wstrict-prototypes -Wpointer-arith -Wcast-qual -Wundef -Wvla
 
-.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary tbb
+.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary fmi-binary-sanitized tbb
 
 install: $(STAMP)
 
 fmi-binary: $(FMI_BINARY)
 
-$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
-	mkdir -p $(dir $@)
+# $(call FMI_COMPILE,<extra flags>,<output>): the sources' hash and fmpy's headers come from the
+# venv's Python.
+FMI_COMPILE = mkdir -p $(dir $(2)) && \
 	hash="$$($(BIN)/python -c 'from orchestrator.fmi_binary import source_hash; print(source_hash())')" && \
 	headers="$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" && \
-	$(FMI_CC) -std=c11 -O2 -fPIC -shared $(FMI_WARNINGS) -fvisibility=hidden \
+	$(FMI_CC) -std=c11 -fPIC -shared $(FMI_WARNINGS) -fvisibility=hidden $(1) \
 		-DSONOTRACK_SOURCE_SHA256="\"$$hash\"" -I"$$headers" \
-		-o $@ $(FMI_SOURCES) -ldl -lpthread
+		-o $(2) $(FMI_SOURCES) -ldl -lpthread
+
+$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
+	$(call FMI_COMPILE,-O2,$@)
+
+# Test only: the same sources under AddressSanitizer and UBSan, into FMI_SANITIZED_OUT (the C host
+# test builds it into a temporary folder and runs it in an ASan-built host; never put in an FMU).
+FMI_SANITIZED_OUT ?= build/sonotrack_fmi2_sanitized.so
+fmi-binary-sanitized: $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
+	$(call FMI_COMPILE,-O1 -g -fno-omit-frame-pointer -fsanitize=address$(COMMA)undefined \
+		-fno-sanitize-recover=undefined,$(FMI_SANITIZED_OUT))
 
 # constraints.txt pins every package to the versions the project was tested with.
 $(STAMP): pyproject.toml constraints.txt

@@ -1,4 +1,5 @@
-/* A minimal FMI 2.0 co-simulation host in C, compiled by tests/integration/test_fmi_binary.py.
+/* A minimal FMI 2.0 co-simulation host in C, compiled by tests/integration/conftest.py
+ * (fixture c_host; test_fmi_binary_c_host.py also builds it with -fsanitize=address,undefined).
  *
  * It loads each FMU's linux64 binary with dlopen (RTLD_NOW | RTLD_LOCAL, as C tools do), runs the
  * full call sequence (instantiate, setup, enter/exit initialisation, a doStep loop with set/get,

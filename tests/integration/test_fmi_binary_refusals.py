@@ -1,0 +1,135 @@
+"""Refusals by sonotrack's FMI binary, and how model exceptions map to FMI statuses.
+
+Every refusal class (wrong state, set of an output or of a fixed parameter after initialisation,
+unknown or mistyped value reference, bad parameter, corrupted state, unsupported call, GUID of
+another build) is an fmi2Error with a message naming the call and the variable, after which the
+instance is freed and a new one runs, or reset gives a working instance. A model's exceptions
+and return values map to fmi2Error / fmi2Discard as docs/fmi_binary.md ("Statuses") says.
+"""
+
+import pytest
+
+from .fmi_binary_support import Host, expect_error, wheel_reference_voltage
+
+pytestmark = pytest.mark.integration
+
+
+def _corrupt(slave):
+    state = slave.getFMUstate()
+    data = bytearray(slave.serializeFMUstate(state))
+    slave.freeFMUstate(state)
+    data[40:48] = b"\xff" * 8  # inside the JSON payload, after the 32-byte header
+    return bytes(data)
+
+
+REFUSALS = {
+    "doStep_before_initialization": (
+        lambda h: None, lambda h: h.slave.doStep(0.0, 0.005),
+        ("fmi2DoStep", "instantiated")),
+    "getReal_before_initialization": (
+        lambda h: None, lambda h: h.slave.getReal([h.refs["voltage"]]),
+        ("fmi2GetReal", "instantiated")),
+    "doStep_after_terminate": (
+        lambda h: (h.initialize(), h.slave.terminate()), lambda h: h.slave.doStep(0.0, 0.005),
+        ("fmi2DoStep", "terminated")),
+    "setReal_of_an_output": (
+        lambda h: h.initialize(), lambda h: h.slave.setReal([h.refs["voltage"]], [1.0]),
+        ("fmi2SetReal", "voltage", "output")),
+    "setReal_of_a_fixed_parameter_after_initialization": (
+        lambda h: h.initialize(), lambda h: h.slave.setReal([h.refs["kp_min"]], [0.5]),
+        ("fmi2SetReal", "kp_min", "fixed parameter")),
+    "unknown_value_reference": (
+        lambda h: h.initialize(), lambda h: h.slave.getReal([9999]),
+        ("fmi2GetReal", "unknown value reference 9999")),
+    "value_reference_of_another_type": (
+        lambda h: h.initialize(), lambda h: h.slave.getReal([h.refs["mode"]]),
+        ("fmi2GetReal", "mode", "String")),
+    "bad_parameter_at_initialization": (
+        lambda h: None, lambda h: h.initialize(mode="spiral"),
+        ("fmi2ExitInitializationMode", "spiral")),
+    "corrupted_serialized_state": (
+        lambda h: h.initialize(),
+        lambda h: h.slave.deSerializeFMUstate(_corrupt(h.slave)),
+        ("fmi2DeSerializeFMUstate", "corrupted state")),
+    "unsupported_directional_derivative": (
+        lambda h: h.initialize(),
+        lambda h: h.slave.getDirectionalDerivative([h.refs["voltage"]], [h.refs["v_ref"]], [1.0]),
+        ("fmi2GetDirectionalDerivative", "not supported")),
+}
+
+
+@pytest.mark.parametrize("refusal", list(REFUSALS), ids=list(REFUSALS))
+def test_refusal_is_an_error_with_a_message_then_free_and_a_new_instance_runs(extracted,
+                                                                             refusal):
+    folder, description = extracted["WheelController"]
+    prepare, call, words = REFUSALS[refusal]
+    host = Host(folder, description, name=refusal)
+    prepare(host)
+    expect_error(host, lambda: call(host), *words)
+    host.free()
+    fresh = Host(folder, description, name="fresh")
+    fresh.initialize()
+    assert fresh.step() == pytest.approx(wheel_reference_voltage(), abs=1e-12)
+    fresh.slave.terminate()
+    fresh.free()
+
+
+def test_after_an_error_reset_gives_a_working_instance(extracted):
+    folder, description = extracted["WheelController"]
+    host = Host(folder, description)
+    expect_error(host, lambda: host.initialize(mode="spiral"), "spiral")
+    host.slave.reset()
+    host.initialize()
+    assert host.step() == pytest.approx(wheel_reference_voltage(), abs=1e-12)
+    host.free()
+
+
+def test_guid_refusal_message_names_both_guids(extracted):
+    folder, description = extracted["WheelController"]
+    messages = []
+
+    class Recording(Host):
+        def _log(self, environment, instance, status, category, message):
+            messages.append((status, message.decode()))
+
+    with pytest.raises(Exception):
+        Recording(folder, description, guid="{00000000-0000-0000-0000-000000000000}")
+    assert any(status == 3 and "00000000-0000" in text and description.guid in text
+               for status, text in messages), messages
+
+
+# ----- status mapping of model exceptions ------------------------------------------------------
+
+@pytest.mark.parametrize("action, status, words", [
+    (1, 3, ("fmi2DoStep", "input action = 1 refused")),
+    (2, 2, ("fmi2DoStep", "too long")),
+    (3, 3, ("fmi2DoStep", "unexpected ZeroDivisionError")),
+    (4, 3, ("fmi2DoStep", "returned None")),
+    (5, 2, ("refused by returning False",)),
+], ids=["InputError", "StepRejectedError", "other_exception", "returns_None", "returns_False"])
+def test_model_exceptions_map_to_fmi_statuses(probe, action, status, words):
+    from fmpy.fmi1 import FMICallException
+
+    folder, description = probe
+    host = Host(folder, description)
+    host.initialize()
+    host.slave.setInteger([host.refs["action"]], [action])
+    with pytest.raises(FMICallException) as caught:
+        host.slave.doStep(0.0, 0.01)
+    assert caught.value.status == status
+    assert any(s == status and all(w in text for w in words) for s, text in host.messages), \
+        host.messages
+    if status == 2:  # a refused step: terminate is allowed, the instance stays usable
+        host.slave.terminate()
+    host.free()
+
+
+def test_an_initialization_call_returning_false_is_an_error(probe):
+    folder, description = probe
+    host = Host(folder, description)
+    host.slave.setupExperiment(startTime=0.0)
+    host.slave.enterInitializationMode()
+    host.slave.setBoolean([host.refs["refuse_init"]], [True])
+    expect_error(host, host.slave.exitInitializationMode, "exit_initialization_mode",
+                 "returned False")
+    host.free()
