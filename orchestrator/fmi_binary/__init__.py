@@ -138,6 +138,13 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
         See :func:`binding_table`.
     library : path-like, optional
         The compiled binary (default: the one ``make`` builds).
+
+    Raises
+    ------
+    BuildError
+        If the library is missing or was not compiled from the C sources now in this folder
+        (its recorded :func:`source_hash` differs): a stale library would put other C code
+        into the FMU than the checkout holds.
     """
     fmu_path = Path(fmu_path)
     library = Path(library)
