@@ -8,13 +8,11 @@ nowhere are refused with a message, never a crash. docs/fmi_binary.md states the
 """
 
 import shutil
-import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-from .fmi_binary_support import (C_HOST_SOURCE, NAMES, check_host_run, fmi_headers, host_env, plan,
+from .fmi_binary_support import (NAMES, SANITIZER_FINDINGS, check_host_run, host_env, plan,
                                  run_host)
 
 pytestmark = pytest.mark.integration
@@ -64,62 +62,11 @@ def test_c_host_runs_the_builds_python_environment(c_host, probe):
 
 # ----- the same runs under AddressSanitizer, UBSan and LeakSanitizer ---------------------------
 
-# The interpreter is never finalized (docs/fmi_binary.md, "Never aborting at exit"), so what
-# Python, its extension modules and the libraries they load allocated is still held at exit and
-# LeakSanitizer lists it. Those allocations are suppressed by the module that made them; the
-# library's own (instances, binding tables, states, log buffers) are made by its code called
-# straight from the host's main, with none of these modules on the stack, so a leak of them is
-# reported (seen: dropping one free() in free_instance fails this test).
-_LEAK_SUPPRESSIONS = """\
-leak:libpython
-leak:.cpython-
-leak:libcrypto
-leak:libssl
-leak:libffi
-leak:libz.so
-leak:libexpat
-leak:liblzma
-leak:libbz2
-leak:openblas
-"""
-_SANITIZER_FINDINGS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
-                       "SUMMARY: ")
-
-
-@pytest.fixture(scope="module")
-def sanitized(tmp_path_factory):
-    """(host, library) built with -fsanitize=address,undefined; skipped where gcc cannot."""
-    compiler, make = shutil.which("gcc"), shutil.which("make")
-    if compiler is None or make is None:
-        pytest.skip("gcc or make is not installed: no sanitizer build")
-    folder = tmp_path_factory.mktemp("sanitized")
-    probe = folder / "probe.c"
-    probe.write_text("int main(void) { return 0; }\n")
-    trial = subprocess.run([compiler, "-fsanitize=address,undefined", "-o", str(folder / "probe"),
-                            str(probe)], capture_output=True, text=True)
-    if trial.returncode != 0:
-        pytest.skip(f"gcc cannot link AddressSanitizer/UBSan here: {trial.stderr.strip()[-300:]}")
-    from orchestrator.build import REPO_ROOT
-
-    library = folder / "sonotrack_fmi2_sanitized.so"
-    # BIN: this Python's environment computes the source hash; -o: never reinstall the venv
-    subprocess.run([make, "-s", "-o", ".venv/.installed", "fmi-binary-sanitized",
-                    f"FMI_SANITIZED_OUT={library}", f"BIN={Path(sys.executable).parent}"],
-                   cwd=REPO_ROOT, check=True, capture_output=True, text=True, timeout=600)
-    host = folder / "fmi_host_sanitized"
-    subprocess.run([compiler, "-std=c11", "-O1", "-g", "-fno-omit-frame-pointer",
-                    "-fsanitize=address,undefined", "-Wall", "-Werror", f"-I{fmi_headers()}",
-                    "-o", str(host), str(C_HOST_SOURCE), "-ldl"], check=True)
-    suppressions = folder / "lsan_suppressions.txt"
-    suppressions.write_text(_LEAK_SUPPRESSIONS)
-    return host, library, suppressions
-
-
 @pytest.mark.parametrize("flags", [(), ("--keep-loaded",)], ids=["dlclose", "no_dlclose"])
 def test_all_five_fmus_under_address_and_undefined_behaviour_sanitizers(c_host, extracted,
                                                                        sanitized, tmp_path,
                                                                        flags):
-    host, library, suppressions = sanitized
+    host, library, suppressions, _ = sanitized
     copies = {}
     for name in NAMES:  # the same FMUs with the sanitized library in place of the shipped one
         folder, description = extracted[name]
@@ -133,7 +80,7 @@ def test_all_five_fmus_under_address_and_undefined_behaviour_sanitizers(c_host, 
     env["LSAN_OPTIONS"] = f"suppressions={suppressions}:print_suppressions=0"
     env["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
     completed = run_host(host, plan(copies, NAMES)[0], *flags, env=env)
-    assert not any(sign in completed.stderr for sign in _SANITIZER_FINDINGS), \
+    assert not any(sign in completed.stderr for sign in SANITIZER_FINDINGS), \
         completed.stderr[-6000:]
     check_host_run(completed, NAMES, extracted)  # fmpy's reference runs the shipped library
     # bit for bit what the shipped (-O2, unsanitized) library prints for the same plan

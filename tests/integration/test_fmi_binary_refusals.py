@@ -4,12 +4,21 @@ Every refusal class (wrong state, set of an output or of a fixed parameter after
 unknown or mistyped value reference, bad parameter, corrupted state, unsupported call, GUID of
 another build) is an fmi2Error with a message naming the call and the variable, after which the
 instance is freed and a new one runs, or reset gives a working instance. A model's exceptions
-and return values map to fmi2Error / fmi2Discard as docs/fmi_binary.md ("Statuses") says.
+and return values map to fmi2Error / fmi2Discard as docs/fmi_binary.md ("Statuses") says. The
+refusals, a '%' in names and messages, and String and FMU-state round trips run again through
+the library built with AddressSanitizer and UBSan: no finding, the same statuses and messages.
 """
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
 
 import pytest
 
-from .fmi_binary_support import Host, expect_error, wheel_reference_voltage
+from .fmi_binary_support import SANITIZER_FINDINGS, Host, expect_error, wheel_reference_voltage
 
 pytestmark = pytest.mark.integration
 
@@ -133,3 +142,81 @@ def test_an_initialization_call_returning_false_is_an_error(probe):
     expect_error(host, host.slave.exitInitializationMode, "exit_initialization_mode",
                  "returned False")
     host.free()
+
+
+# ----- the same refusals under AddressSanitizer and UBSan, in a Python host --------------------
+
+_UNDER_SANITIZERS = textwrap.dedent('''
+    import json, sys
+    sys.path.insert(0, sys.argv[1])
+    import fmpy
+    from tests.integration.fmi_binary_support import Host
+    from tests.integration.test_fmi_binary_refusals import REFUSALS
+
+    folder = sys.argv[2]
+    description = fmpy.read_model_description(folder)
+    log = []
+    for name, (prepare, call, words) in REFUSALS.items():
+        host = Host(folder, description, name=f"{name} 100%")  # '%' reaches the host's printf
+        prepare(host)
+        try:
+            call(host)
+        except Exception as exc:
+            log.append([name, "raised", getattr(exc, "status", None)])
+        log += [[name, status, text] for status, text in host.messages]
+        host.free()
+    host = Host(folder, description, name="round trips")
+    try:  # a refused value with '%' in the message: the escaping path
+        host.initialize(mode="50%-spiral")
+    except Exception as exc:
+        log.append(["percent", "raised", getattr(exc, "status", None)])
+    host.slave.reset()
+    host.slave.setupExperiment(startTime=0.0)
+    host.slave.enterInitializationMode()
+    host.slave.setString([host.refs["mode"]], ["pid"])
+    log.append(["string", host.slave.getString([host.refs["mode"]])[0].decode()])
+    host.slave.exitInitializationMode()
+    log.append(["steps", [host.step(k) for k in range(20)]])
+    state = host.slave.getFMUstate()
+    blob = host.slave.serializeFMUstate(state)
+    copy = host.slave.deSerializeFMUstate(blob)
+    host.slave.setFMUstate(copy)
+    host.slave.freeFMUstate(state)
+    host.slave.freeFMUstate(copy)
+    log.append(["restored", [host.step(k) for k in range(20, 25)], len(blob)])
+    log += [["round trips", status, text] for status, text in host.messages]
+    host.slave.terminate()
+    host.free()
+    print(json.dumps(log))
+''')
+
+
+def test_refusals_and_round_trips_under_address_and_undefined_behaviour_sanitizers(
+        extracted, sanitized, tmp_path):
+    """Every refusal class, a '%' in names and messages, strings and FMU states, through the
+    sanitized library in a Python host (the ASan runtime preloaded): no finding, and the same
+    statuses, messages and numbers as the shipped library gives."""
+    from orchestrator.build import REPO_ROOT
+
+    _, library, _, runtime = sanitized
+    folder, description = extracted["WheelController"]
+    copy = tmp_path / "WheelController"
+    shutil.copytree(folder, copy)
+    shutil.copy(library, copy / "binaries" / "linux64" / "WheelController.so")
+    env = dict(os.environ, LD_PRELOAD=runtime,
+               ASAN_OPTIONS="detect_leaks=0:halt_on_error=1",  # leaks: the C host test
+               UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1")
+    runs = {}
+    for label, unzipped, environment in (("sanitized", copy, env), ("shipped", folder, None)):
+        completed = subprocess.run([sys.executable, "-c", _UNDER_SANITIZERS, str(REPO_ROOT),
+                                    str(unzipped)], capture_output=True, text=True, cwd="/",
+                                   env=environment, timeout=600)
+        assert completed.returncode == 0, completed.stderr[-6000:]
+        assert not any(sign in completed.stderr for sign in SANITIZER_FINDINGS), \
+            completed.stderr[-6000:]
+        runs[label] = json.loads(completed.stdout.splitlines()[-1])
+    assert runs["sanitized"] == runs["shipped"]
+    refused = [entry for entry in runs["shipped"] if entry[1] == "raised"]
+    assert len(refused) == len(REFUSALS) + 1 and all(entry[2] == 3 for entry in refused)
+    # the logger gets a printf format: the model's "%" arrives escaped as "%%"
+    assert any("'50%%-spiral'" in str(entry[-1]) for entry in runs["shipped"]), runs["shipped"]
