@@ -17,6 +17,10 @@ DC, whatever the motor. The feedforward supplies the voltage the reference speed
 the pure PD law has no steady-state error only when ``g`` matches the motor; a mismatch
 ``g_motor (1 + delta)`` leaves ``e_ss = -delta v_ref / (1 + (1 + delta) kp)``.
 
+Output limit: ``+-v_supply``, or the measured supply of the motor driver when it is lower
+(``supply``): a sagging battery saturates the driver below the nominal supply, and the
+anti-windup of the integral terms can only stop integrating when it knows that limit.
+
 Integral trim (the PD form chosen, docs/control.md): the fgs_pd and pd modes add
 ``ki I`` with ``ki = trim_ki`` [1/s] and ``I`` the time integral of ``e_n`` (the PID's
 integrator and anti-windup, :class:`.PidLaw`), so the steady-state error is zero for any
@@ -148,7 +152,7 @@ class WheelSpeedController:
             return self.pid.kp, self.pid.kd
         return self.pd_kp, self.pd_kd
 
-    def step(self, v_ref, v_meas, h):
+    def step(self, v_ref, v_meas, h, supply=None):
         """Compute the armature voltage for one control period.
 
         Parameters
@@ -159,16 +163,21 @@ class WheelSpeedController:
             Measured rim speed [m/s] (from the encoder).
         h : float
             Control period [s], > 0.
+        supply : float, optional
+            Measured supply voltage of the motor driver [V], >= 0. The output is limited to
+            ``+-min(v_supply, supply)`` and the integral terms' anti-windup acts at that
+            limit. None: ``v_supply``.
 
         Returns
         -------
         float
-            Voltage [V] in [-v_supply, v_supply].
+            Voltage [V] in [-limit, limit].
 
         Raises
         ------
         InputError
-            If ``v_ref`` or ``v_meas`` is not finite or ``h`` is not positive; state unchanged.
+            If ``v_ref`` or ``v_meas`` is not finite, ``h`` is not positive or ``supply`` is
+            negative or not finite; state unchanged.
         """
         if not math.isfinite(v_ref):
             raise InputError(f"WheelController input v_ref = {v_ref!r} is not finite")
@@ -176,12 +185,18 @@ class WheelSpeedController:
             raise InputError(f"WheelController input v_meas = {v_meas!r} is not finite")
         if not (math.isfinite(h) and h > 0.0):
             raise InputError(f"WheelController step size = {h!r} must be > 0")
+        limit = self.v_supply
+        if supply is not None:
+            if not (math.isfinite(supply) and supply >= 0.0):
+                raise InputError(f"WheelController input supply_voltage = {supply!r} must be "
+                                 "a finite voltage >= 0")
+            if supply < limit:
+                limit = supply
         error = v_ref - v_meas
         rate = self.derivative.update(error, h)
         e_n = error / self.e_range
         de_n = rate / self.de_range
         offset = self.volts_per_speed * v_ref if self.feedforward else 0.0
-        limit = self.v_supply
         if self.mode == "pid":
             voltage = self.pid.output(e_n, de_n, h, self.to_voltage, offset, limit)
         else:

@@ -3,6 +3,10 @@
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .controller import DEFAULTS, WheelSpeedController
 
+# Start value of the supply_voltage input: above any v_supply in range, so an unconnected
+# input leaves the limit at v_supply.
+SUPPLY_NOT_MEASURED = 1000.0
+
 __all__ = ["WheelController"]
 
 _REAL_PARAMETERS = (
@@ -42,6 +46,8 @@ class WheelController(SonotrackSlave):
         super().__init__(**kwargs)
         self.v_ref = 0.0
         self.v_meas = 0.0
+        # Not connected, the measured supply never limits: v_supply does (as before).
+        self.supply_voltage = SUPPLY_NOT_MEASURED
         self.mode = DEFAULTS["mode"]
         self.fuzzy_method = DEFAULTS["fuzzy_method"]
         self.feedforward = DEFAULTS["feedforward"]
@@ -56,6 +62,9 @@ class WheelController(SonotrackSlave):
 
         self.input_real("v_ref", "m/s", "reference rim speed of the wheel")
         self.input_real("v_meas", "m/s", "measured rim speed of the wheel (from the encoder)")
+        self.input_real("supply_voltage", "V", "measured supply voltage of the motor driver; "
+                        "the output and the anti-windup are limited to min(v_supply, it); "
+                        f"start value {SUPPLY_NOT_MEASURED:g} V: not measured")
         # No direct feedthrough: every output is computed in do_step and held until the next
         # one, so setting v_ref or v_meas changes no output before the next step.
         self.output_real("voltage", "V", "armature voltage command")
@@ -82,7 +91,7 @@ class WheelController(SonotrackSlave):
         if self.inputs_refused() or self.step_refused(step_size):
             return False
         core = self.core
-        self.voltage = core.step(self.v_ref, self.v_meas, step_size)
+        self.voltage = core.step(self.v_ref, self.v_meas, step_size, self.supply_voltage)
         self.kp = core.kp
         self.kd = core.kd
         self.error = core.error

@@ -56,6 +56,12 @@ _REAL_OUTPUTS = (
     ("current_left", "A", "left armature current"),
     ("current_right", "A", "right armature current"),
 )
+_SUPPLY_OUTPUTS = (
+    ("supply_voltage_left", "left", "supply voltage of the left motor driver for the next "
+     "step (v_supply, or lower while a supply_sag is on): the battery monitor"),
+    ("supply_voltage_right", "right", "supply voltage of the right motor driver for the next "
+     "step"),
+)
 _INTEGER_OUTPUTS = (
     ("encoder_left", "left encoder count (728 per wheel revolution by default)"),
     ("encoder_right", "right encoder count"),
@@ -88,6 +94,8 @@ class RobotPlant(SonotrackSlave):
         self.input_real("voltage_right", "V", "right armature voltage (clamped to +-v_supply)")
         for name, unit, text in _REAL_OUTPUTS:
             self.output_real(name, unit, text)
+        for name, _, text in _SUPPLY_OUTPUTS:
+            self.output_real(name, "V", text)
         for name, text in _INTEGER_OUTPUTS:
             self.output_integer(name, text)
         for name, unit, text in _REAL_PARAMETERS:
@@ -124,3 +132,7 @@ class RobotPlant(SonotrackSlave):
         self.encoder_left = core.encoder_left
         self.encoder_right = core.encoder_right
         self.faults_active = core.faults_active
+        nominal = core.parameters.v_supply
+        for name, wheel, _ in _SUPPLY_OUTPUTS:
+            setattr(self, name, core.faults.supply(core.time, wheel, nominal)
+                    if core.faults else nominal)

@@ -66,6 +66,7 @@ FMU_PORTS = {
     "WheelController": [
         ("v_ref", "input", "Real", "m/s"),
         ("v_meas", "input", "Real", "m/s"),
+        ("supply_voltage", "input", "Real", "V"),
         ("voltage", "output", "Real", "V"),
     ],
     "RobotPlant": [
@@ -81,6 +82,8 @@ FMU_PORTS = {
         ("odom_x", "output", "Real", "m"),
         ("odom_y", "output", "Real", "m"),
         ("odom_heading", "output", "Real", "rad"),
+        ("supply_voltage_left", "output", "Real", "V"),
+        ("supply_voltage_right", "output", "Real", "V"),
     ],
 }
 
@@ -113,6 +116,8 @@ SONOTRACK_CONNECTIONS = [
     ("plant.wheel_speed_left", "controller_left.v_meas"),
     ("planner.v_ref_right", "controller_right.v_ref"),
     ("plant.wheel_speed_right", "controller_right.v_meas"),
+    ("plant.supply_voltage_left", "controller_left.supply_voltage"),
+    ("plant.supply_voltage_right", "controller_right.supply_voltage"),
     ("controller_left.voltage", "plant.voltage_left"),
     ("controller_right.voltage", "plant.voltage_right"),
 ]
@@ -149,7 +154,7 @@ def _unit_bases():
 
 
 def sonotrack_system(stop_time=30.0, fmu_prefix=""):
-    """Return the sonotrack system (six FMU instances, 18 connections) as a description.
+    """Return the sonotrack system (six FMU instances, 20 connections) as a description.
 
     Parameters
     ----------

@@ -176,3 +176,59 @@ def test_reset_restores_construction_state():
     for k in range(5):
         assert used.step(0.2, 0.02 * k, H) == fresh.step(0.2, 0.02 * k, H)
     assert np.isfinite(used.voltage)
+
+
+def _sagging_supply_loop(measured, sag=1.0, v_ref=0.3):
+    """Exact first-order wheel whose driver clips at a supply that sags from 5 s to 10 s."""
+    controller = WheelSpeedController()   # fgs_pd with the integral trim (the default)
+    g, nominal = DEFAULTS["volts_per_speed"], DEFAULTS["v_supply"]
+    decay = math.exp(-H / TAU_MOTOR)
+    v, speeds, integrals = 0.0, [], []
+    for k in range(int(20.0 / H)):
+        supply = sag if 5.0 <= k * H < 10.0 else nominal
+        voltage = controller.step(v_ref, v, H, supply if measured else None)
+        applied = min(supply, max(-supply, voltage))   # the driver cannot give more
+        v = decay * v + (1.0 - decay) * applied / g
+        speeds.append(v)
+        integrals.append(controller.trim.integral)
+    return np.array(speeds), np.array(integrals)
+
+
+def test_trim_does_not_wind_up_while_a_measured_supply_sag_saturates_the_driver():
+    speeds, integrals = _sagging_supply_loop(measured=True)
+    sag_start, sag_end = int(5.0 / H), int(10.0 / H)
+    # analytic reference: held at 1 V from the step before the sag, the wheel decays to
+    # 1 V / g (0.225 m/s) as v_k = v_inf + (v_0 - v_inf) exp(-k H / tau)
+    v_inf, v_0 = 1.0 / DEFAULTS["volts_per_speed"], speeds[sag_start - 1]
+    steps = sag_end - sag_start
+    assert speeds[sag_end - 1] == pytest.approx(
+        v_inf + (v_0 - v_inf) * math.exp(-steps * H / TAU_MOTOR), rel=1e-9)
+    # conditional integration at the measured limit: the integral stops when the driver
+    # saturates and stays put for the rest of the sag
+    saturated = integrals[sag_start + 1:sag_end]
+    assert np.ptp(saturated) == 0.0
+    # after the sag, no more overshoot than the start-up from rest at 0 s
+    assert speeds[sag_end:].max() <= max(speeds[:sag_start].max(), 0.3 * 1.01)
+
+
+def test_without_the_supply_measurement_the_trim_winds_up_and_overshoots():
+    # the broken input: the controller limits at its nominal 11.1 V, never saturates, and
+    # integrates the sag's whole speed deficit: with 1 V applied throughout, the error is
+    # e_k = (v_0 - v_inf)(1 - d^k), d = exp(-H / tau), summed over the sag's steps
+    speeds, integrals = _sagging_supply_loop(measured=False)
+    sag_start, sag_end = int(5.0 / H), int(10.0 / H)
+    v_inf, v_0 = 1.0 / DEFAULTS["volts_per_speed"], speeds[sag_start - 1]
+    decay, steps = math.exp(-H / TAU_MOTOR), sag_end - sag_start
+    expected = sum((0.3 - v_inf - (v_0 - v_inf) * decay ** k) * H for k in range(steps))
+    assert (integrals[sag_end - 1] - integrals[sag_start - 1]
+            == pytest.approx(expected / DEFAULTS["e_range"], rel=1e-9))
+    assert speeds[sag_end:].max() > 0.3 * 1.05
+
+
+def test_supply_input_is_checked_and_limits_the_output():
+    controller = WheelSpeedController()
+    assert controller.step(0.3, 0.0, H, 2.0) == 2.0
+    with pytest.raises(InputError, match="supply_voltage"):
+        controller.step(0.3, 0.0, H, -1.0)
+    with pytest.raises(InputError, match="supply_voltage"):
+        controller.step(0.3, 0.0, H, math.nan)

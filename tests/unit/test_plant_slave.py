@@ -91,5 +91,5 @@ def test_model_description_declares_units_and_no_direct_feedthrough():
     assert variables["encoder_left"].get("variability") == "discrete"
     assert variables["encoder_left"].find("Integer") is not None
     outputs = root.find("ModelStructure").find("Outputs")
-    assert len(outputs) == 20  # 17 Real, 2 encoders, faults_active
+    assert len(outputs) == 22  # 19 Real (2 supply voltages), 2 encoders, faults_active
     assert all(unknown.get("dependencies") == "" for unknown in outputs)

@@ -390,7 +390,7 @@ def test_sonotrack_table_checks_clean_against_matching_fmus(tmp_path):
         make_fmu(tmp_path / f"{model}.fmu", model, ports)
     ssd = write_ssd(tmp_path / "SystemStructure.ssd", sonotrack_system())
     system = load_system(ssd)
-    assert len(system.connections) == 18
+    assert len(system.connections) == 20
     assert system.stepping_order() == list(SONOTRACK_INSTANCES)
 
 

@@ -75,7 +75,7 @@ def test_committed_ssd_wires_the_design_connections():
         "RobotPlant.fmu", "WheelController.fmu", "WheelController.fmu"]
     assert [str(c) for c in system.connections] == [f"{a} -> {b}"
                                                     for a, b in SONOTRACK_CONNECTIONS]
-    assert len(system.connections) == 18
+    assert len(system.connections) == 20
     # libcosim rejects a connection to an undeclared connector: every end must be declared.
     for connection in system.connections:
         assert system.component(connection.start_element).connector(
