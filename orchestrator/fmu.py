@@ -57,7 +57,10 @@ def extract_once(path):
     from orchestrator.extract import extract_fmu
 
     path = Path(path).resolve()
-    stat = path.stat()
+    try:
+        stat = path.stat()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such FMU file") from None
     # a file rebuilt in place (another size, mtime or inode) is unpacked again: reusing the
     # first folder would run the earlier build's code
     signature = (stat.st_size, stat.st_mtime_ns, stat.st_ino)

@@ -6,16 +6,9 @@ returns ``name -> (path, caption)``; the Markdown links them, the HTML embeds th
 
 import numpy as np
 
+from orchestrator.matplotlib_agg import pyplot
+
 __all__ = ["write_figures"]
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _save(plt, fig, path):
@@ -270,7 +263,7 @@ def _gain_factor_edges(plt, f, path):
 
 def write_figures(model, figures, out_dir):
     """Draw every figure into ``out_dir``; return ``name -> (path, caption)``."""
-    plt = _pyplot()
+    plt = pyplot()
     plan = [
         ("stability_region", lambda p: _stability_region(plt, model, figures, p),
          "Stability region of the sampled loop in (kp, kd), with the paper's gain box and the "

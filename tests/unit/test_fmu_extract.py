@@ -136,3 +136,16 @@ def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
     monkeypatch.delenv("SONOTRACK_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
     assert cache_dir() == tmp_path / "x" / "sonotrack"
+
+
+@pytest.mark.parametrize("loader", ["extract_fmu", "extract_once"])
+def test_a_missing_fmu_is_one_clear_error(cache, tmp_path, loader):
+    # extract_once stats the file to notice a rebuild in place; a missing file must still be the
+    # one-line ConfigError naming it, not a bare FileNotFoundError
+    import orchestrator.fmu as fmu_module
+    import orchestrator.extract as extract_module
+
+    load = getattr(fmu_module if loader == "extract_once" else extract_module, loader)
+    missing = tmp_path / "gone.fmu"
+    with pytest.raises(ConfigError, match=r"gone\.fmu: no such FMU file"):
+        load(missing)
