@@ -22,7 +22,7 @@ def register_cli(subparsers):
     parser.add_argument("--seed", type=int, default=0, help="study seed of the draws (default 0)")
     parser.add_argument("--tables", help=f"comma-separated subset of {','.join(TABLES)}")
     parser.add_argument("--workers", type=int, help="local Dask worker processes (default: CPUs)")
-    parser.add_argument("--scheduler", help="Dask scheduler address (default: a LocalCluster)")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://HOST:8786 (default: the local engine, Dask's process scheduler on forked workers)")
     parser.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=_cmd_reproduce)

@@ -82,7 +82,8 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
     speeds : sequence of float, optional
         Subset of the paper's speeds for Tables 1-3 (default all five; a trend needs two).
     scheduler : str, optional
-        Address of a running Dask scheduler instead of a local cluster.
+        Address of a running Dask scheduler instead of the local engine
+        (:class:`orchestrator.sweep.engine.LocalEngine`).
     runs : int
         Monte Carlo runs per cell (default 20; >= 2 for an interval).
     study_seed : int
