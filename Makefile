@@ -32,7 +32,8 @@ FMI_COMPILE = mkdir -p $(dir $(2)) && \
 		-DSONOTRACK_SOURCE_SHA256="\"$$hash\"" -I"$$headers" \
 		-o $(2) $(FMI_SOURCES) -ldl -lpthread
 
-$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
+# Makefile: a change to the compile flags rebuilds it too (the source hash covers only the C).
+$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) Makefile $(STAMP)
 	$(call FMI_COMPILE,-O2,$@)
 
 # Test only: the same sources under AddressSanitizer and UBSan, into FMI_SANITIZED_OUT (the C host

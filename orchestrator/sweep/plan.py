@@ -12,11 +12,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from components.common.errors import ConfigError
+from orchestrator.scenario.schema import SEED_MAX
 
 __all__ = ["PlannedRun", "expand_grid", "parse_assignment", "parse_seeds", "plan_runs",
            "plan_scenarios"]
-
-_SEED_MAX = 2**31 - 1
 
 
 @dataclass
@@ -108,8 +107,8 @@ def parse_seeds(text):
     if not seeds:
         raise ConfigError(f"--seeds {text!r}: {form}")
     for seed in seeds:
-        if not 0 <= seed <= _SEED_MAX:
-            raise ConfigError(f"--seeds {text!r}: seed {seed} is outside 0..{_SEED_MAX}")
+        if not 0 <= seed <= SEED_MAX:
+            raise ConfigError(f"--seeds {text!r}: seed {seed} is outside 0..{SEED_MAX}")
     if len(set(seeds)) != len(seeds):
         twice = sorted({s for s in seeds if seeds.count(s) > 1})
         raise ConfigError(f"--seeds {text!r}: seed {twice[0]} is given twice")
