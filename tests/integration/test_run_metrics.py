@@ -14,21 +14,11 @@ from orchestrator.build import REPO_ROOT
 from orchestrator.run import run_scenario
 from orchestrator.run_metrics import summary_figures_from_csv
 from orchestrator.scenario import load_scenario
+from tests.json_leaves import leaves
 
 pytestmark = pytest.mark.integration
 
 SCENARIOS = REPO_ROOT / "scenarios"
-
-
-def _leaves(value, prefix=""):
-    if isinstance(value, dict):
-        for key, item in value.items():
-            yield from _leaves(item, f"{prefix}.{key}")
-    elif isinstance(value, list):
-        for i, item in enumerate(value):
-            yield from _leaves(item, f"{prefix}[{i}]")
-    else:
-        yield prefix, value
 
 
 @pytest.mark.parametrize("path, record_interval, bound", [
@@ -48,8 +38,8 @@ def test_summary_figures_equal_the_chunked_reread(path, record_interval, bound, 
     reference = summary_figures_from_csv(result.results_csv, scenario.faults,
                                          result.summary["stop_distance_m"])
     on_disk = json.loads(result.summary_json.read_text())
-    for key, value in _leaves(reference):
-        ours = dict(_leaves(on_disk))[key]
+    for key, value in leaves(reference):
+        ours = dict(leaves(on_disk))[key]
         if isinstance(value, float):
             assert math.isclose(ours, value, rel_tol=1e-12, abs_tol=1e-12), key
         else:

@@ -14,6 +14,7 @@ from components.common.faults import Fault
 from orchestrator.recorder import Recorder
 from orchestrator.run_metrics import (MAX_TRACE_ROWS, RowTrace, summary_figures,
                                       summary_figures_from_csv)
+from tests.json_leaves import leaves
 
 COLUMNS = ["source.x", "source.y", "plant.x", "plant.y", "plant.heading", "plant.speed",
            "plant.slip_left", "plant.slip_right", "localizer.fix_attempts",
@@ -38,19 +39,8 @@ def _rows(count, seed):
                           bool(1000 < k < 1800), bool(k > 4000), float(rng.normal())])
 
 
-def _leaves(value, prefix=""):
-    if isinstance(value, dict):
-        for key, item in value.items():
-            yield from _leaves(item, f"{prefix}.{key}")
-    elif isinstance(value, list):
-        for i, item in enumerate(value):
-            yield from _leaves(item, f"{prefix}[{i}]")
-    else:
-        yield prefix, value
-
-
 def _assert_equal(ours, reference, tolerance=1e-12):
-    left, right = dict(_leaves(ours)), dict(_leaves(reference))
+    left, right = dict(leaves(ours)), dict(leaves(reference))
     assert left.keys() == right.keys()
     for key, value in right.items():
         if isinstance(value, float):
