@@ -36,7 +36,7 @@ def single_rate_ssd(fmu_dir):
 
 
 def libcosim_run(ssd, step, stop, observer):
-    from orchestrator.crosscheck import run_libcosim_ssd
+    from orchestrator.hosts.libcosim import run_libcosim_ssd
 
     timing, rows = run_libcosim_ssd(ssd, step, stop, ["plant.x", "plant.y"], observer=observer)
     return timing, np.array(rows)
@@ -52,7 +52,7 @@ def _single_rate_scenario(step, stop, outputs):
 
 
 def ours_single_rate(fmu_dir, step, stop, out, outputs):
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
 
     started = time.perf_counter()
     result = run_scenario(_single_rate_scenario(step, stop, outputs), out, progress=False,
@@ -66,8 +66,8 @@ def ours_single_rate(fmu_dir, step, stop, out, outputs):
 
 def ours_fmi_calls(fmu_dir, step, stop, out, outputs):
     """Count our master's FMI calls (get, set, doStep) on the single-rate system."""
-    from orchestrator import fmu
-    from orchestrator.run import run_scenario
+    from orchestrator.fmu import handle as fmu
+    from orchestrator.run.runner import run_scenario
 
     calls = [0]
 
@@ -98,7 +98,7 @@ def fmi_call_floor_us(path, repeats=3, number=5000):
     """Median cost of the cheapest FMI call we make: fmi2GetReal of one output of an FMU."""
     import timeit
 
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.fmu.handle import FmuInstance
 
     instance = FmuInstance(path, "floor")
     instance.instantiate(start_time=0.0, stop_time=1.0)
@@ -110,8 +110,8 @@ def fmi_call_floor_us(path, repeats=3, number=5000):
 
 def model_compute_s(fmu_dir, step, stop, out):
     """Seconds the slaves spend in ``do_step`` on the single-rate system, timed in-process."""
-    from orchestrator import inprocess
-    from orchestrator.run import run_scenario
+    from orchestrator.fmu import inprocess
+    from orchestrator.run.runner import run_scenario
 
     spent = {}
 

@@ -84,8 +84,8 @@ def summary_figures_cost(results_csv, repeats):
     """Seconds to compute the summary's figures of one default run: from the rows kept while
     recording (:class:`RowTrace`, what run_scenario does) against re-reading results.csv in
     chunks (what it did); and the cost of keeping the rows (one append per recorded row)."""
-    from orchestrator.results import read_header, read_results
-    from orchestrator.run_metrics import RowTrace, summary_figures, summary_figures_from_csv
+    from orchestrator.run.results import read_header, read_results
+    from orchestrator.run.summary import RowTrace, summary_figures, summary_figures_from_csv
 
     stop = json.loads((Path(results_csv).parent / "summary.json").read_text())["stop_distance_m"]
     columns = read_header(results_csv)[1:]
@@ -191,7 +191,7 @@ def section(commands, summary_costs, import_floors):
         "note": "phases from wall-clock timestamps in the command's own process, which "
                 "partition its wall time: start-up = process spawn to run_scenario entered "
                 "(interpreter, imports, parsing, the scenario's checks; the timing wrapper "
-                "imports orchestrator.run before parsing, which the CLI does after); set-up "
+                "imports orchestrator.run.runner before parsing, which the CLI does after); set-up "
                 "= to the first step (system, FMU instances, spawning the renderers); "
                 "summary = last step to the ok summary.json on disk; plots = from there to "
                 "run_scenario's return (waiting for the renderers to write the PNGs, or "

@@ -10,7 +10,7 @@ VARIANT is ``default`` (sonotrack as shipped: one renderer process, which forks 
 figures on two cores), ``one-renderer`` (the same renderer drawing every figure itself), or
 ``in-process`` (what the command did before the renderer: import matplotlib and draw every
 figure in its own process once the summary is on disk, through the same
-:func:`orchestrator.plots.plot_run`), so that one run of the benchmark
+:func:`orchestrator.run.plots.plot_run`), so that one run of the benchmark
 measures what each piece buys.
 """
 
@@ -46,8 +46,8 @@ class _InProcessRenderer:
         self.timings = {}
 
     def render(self, results_csv, out_dir, max_rows):
-        from orchestrator.plots import plot_run
-        from orchestrator.results import read_results
+        from orchestrator.run.plots import plot_run
+        from orchestrator.run.results import read_results
 
         return plot_run(read_results(results_csv, max_rows=max_rows), out_dir)
 
@@ -58,10 +58,10 @@ class _InProcessRenderer:
 def main():
     times_path, variant, argv = sys.argv[1], sys.argv[2], sys.argv[3:]
     import orchestrator.cli as cli
-    import orchestrator.master as master
-    import orchestrator.outputs as outputs
-    import orchestrator.plot_renderer as plot_renderer
-    import orchestrator.run as run
+    import orchestrator.run.master as master
+    import orchestrator.run.folder as outputs
+    import orchestrator.run.plot_renderer as plot_renderer
+    import orchestrator.run.runner as run
 
     if variant == "in-process":
         plot_renderer.PlotRenderer = _InProcessRenderer

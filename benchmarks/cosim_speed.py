@@ -52,7 +52,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def run_default(fmu_dir, backend, out):
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
 
     result = run_scenario(ROOT / "scenarios" / "s_curve.toml", out, progress=False,
                           fmu_dir=fmu_dir, plots=False, backend=backend)
@@ -67,8 +67,8 @@ def instance_steps(scenario_path):
 
 
 def single_fmu_ours(path, name, inputs, step, stop):
-    from orchestrator.fmu import FmuInstance
-    from orchestrator.master import InstanceSpec, Master
+    from orchestrator.fmu.handle import FmuInstance
+    from orchestrator.run.master import InstanceSpec, Master
 
     instance = FmuInstance(path, name)
     master = Master([InstanceSpec(name, instance, 1, {})], [], step)

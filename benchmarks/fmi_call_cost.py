@@ -44,8 +44,8 @@ TARGET_RATIO = 0.7
 
 def build_both(names, out):
     """Build ``names`` into out/ours and out/pythonfmu (same code, different linux64 binary)."""
-    from orchestrator.build import build_fmu
-    from orchestrator.fmi_binary import restore_pythonfmu_binary
+    from orchestrator.build.fmus import build_fmu
+    from orchestrator.build.fmi_binary import restore_pythonfmu_binary
 
     paths = {"ours": {}, "pythonfmu": {}}
     for name in names:
@@ -175,7 +175,7 @@ def model_do_step_us(repeats, calls):
 
 _SCENARIO = textwrap.dedent('''
     import json, sys
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
     import time
     started = time.process_time()
     result = run_scenario(sys.argv[1], sys.argv[2], progress=False, fmu_dir=sys.argv[3],

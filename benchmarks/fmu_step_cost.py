@@ -56,7 +56,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
 
     from components.plant import PlantParameters, RobotPlantCore
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.fmu.handle import FmuInstance
 
     path = build_fresh(["RobotPlant"])["RobotPlant"]
     cases = []

@@ -363,7 +363,7 @@ def temp_folder(work, runs=20):
 
 _MEMORY_CHILD = """
 import sys
-from orchestrator.run import run_scenario
+from orchestrator.run.runner import run_scenario
 run_scenario(sys.argv[1], sys.argv[2], progress=False)
 """
 
@@ -449,7 +449,7 @@ def main(argv=None):
     record["machine"] = {"python": sys.version.split()[0], "cpus": os.cpu_count(),
                          "load_average_1min": os.getloadavg()[0]}
     RESULTS.mkdir(parents=True, exist_ok=True)
-    from orchestrator.outputs import atomic_write_json
+    from orchestrator.run.folder import atomic_write_json
 
     # read just before writing: sections written meanwhile by another script (e.g. faults)
     # or by another run of this one (other --only sections) are kept

@@ -1,7 +1,7 @@
 """Does the loop survive each fault kind? One closed-loop run per ``scenarios/faults/*.toml``.
 
 For each scenario: injected (the target reported the fault active), survived (every check of
-:func:`orchestrator.fault_metrics.survival`), final distance, max slip ratio, invalid fixes,
+:func:`orchestrator.run.fault_metrics.survival`), final distance, max slip ratio, invalid fixes,
 fixes the planner's gate rejected, stops by the planner's wheel check and odometry check, and
 odometry-check stops outside an encoder fault (false positives; target 0). Target: all
 survived. Writes the ``faults`` section of
@@ -30,9 +30,9 @@ def fault_rows(fmu_dir, plot_dir=None, names=None):
     import numpy as np
 
     from components.planner.odometry_check import TRIPS_AFTER
-    from orchestrator.fault_metrics import survival
-    from orchestrator.results import read_results
-    from orchestrator.run import run_scenario
+    from orchestrator.run.fault_metrics import survival
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_scenario
     from orchestrator.scenario import load_scenario
 
     rows = []
@@ -49,7 +49,7 @@ def fault_rows(fmu_dir, plot_dir=None, names=None):
             trips = data["time"][np.flatnonzero(np.diff(data["planner.odometry_faults"]) > 0)
                                  + 1]
             if plot_dir is not None:
-                from orchestrator.fault_plots import plot_fault_run
+                from orchestrator.run.fault_plots import plot_fault_run
 
                 plot_fault_run(data, scenario, Path(plot_dir) / f"{path.stem}.png")
         robustness = result.summary["robustness"]
@@ -96,7 +96,7 @@ def main(argv=None):
     parser.add_argument("--plots", help="folder for one PNG per fault scenario")
     parser.add_argument("names", nargs="*", help="scenario names (default: all)")
     args = parser.parse_args(argv)
-    from orchestrator.build import FMU_PACKAGES
+    from orchestrator.build.fmus import FMU_PACKAGES
 
     paths = build_fresh(list(FMU_PACKAGES))
     fmu_dir = next(iter(paths.values())).parent
@@ -127,7 +127,7 @@ def write_section(name, section):
     """Set one top-level section of ``robustness.json``, keeping the others; return the path."""
     import json
 
-    from orchestrator.outputs import atomic_write_json
+    from orchestrator.run.folder import atomic_write_json
 
     path = RESULTS / "robustness.json"
     try:

@@ -26,7 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._common import build_fresh, write_result  # noqa: E402
-from orchestrator.build import FMU_PACKAGES, REPO_ROOT, write_ssp_archive  # noqa: E402
+from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT, write_ssp_archive  # noqa: E402
 from orchestrator.ssp import read_ssd, write_ssd  # noqa: E402
 
 STOP = 1.0
@@ -36,7 +36,7 @@ TOLERANCE = 1e-6   # ecos prints six decimals; every other host is compared at t
 
 
 def _ours(ssd, seed, multi_rate, out_dir, stop=STOP, base_step=0.01):
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
     from orchestrator.scenario import scenario_from_dict
 
     system = read_ssd(ssd)
@@ -63,7 +63,7 @@ def _variant_file(system, folder, name, keep):
 
 
 def _libcosim(ssd, step=None):
-    from orchestrator.crosscheck import run_libcosim_ssd
+    from orchestrator.hosts.libcosim import run_libcosim_ssd
 
     base = read_ssd(ssd).base_step if step is None else step
     _, rows = run_libcosim_ssd(ssd, step, STOP, COLUMNS)
@@ -100,7 +100,7 @@ def _fmpy(ssp, **kwargs):
 
 
 def _ecos(binary, folder, out_dir, parameter_set=None, step=0.01):
-    from orchestrator.ecos_host import read_ecos_csv, run_ecos
+    from orchestrator.hosts.ecos import read_ecos_csv, run_ecos
 
     completed, csv_path = run_ecos(binary, folder, STOP, step, out_dir,
                                    parameter_set=parameter_set)
@@ -184,7 +184,7 @@ def main():
         fm_default.get("error") or f"runs; step = stop_time/100 = {fm_default['step']} s "
                                    f"(the file's base step is {system.base_step} s)")}
 
-    from orchestrator.ecos_host import ecos_binary, run_ecos
+    from orchestrator.hosts.ecos import ecos_binary, run_ecos
     binary, reason = ecos_binary(work)
     if binary is None:
         hosts["ecos"] = {"error": reason}

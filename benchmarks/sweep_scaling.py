@@ -42,7 +42,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import build_fresh, median, write_result  # noqa: E402
 
-from orchestrator.dask_cluster import start_cluster, stop_cluster  # noqa: E402
+from orchestrator.sweep.dask_cluster import start_cluster, stop_cluster  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "scenarios" / "s_curve.toml"
@@ -62,7 +62,7 @@ base = load_scenario({scenario!r}).with_overrides(stop_time=float(stop_time))
 seeds = list(range(1, int(runs) + 1))
 recorded = None
 if variant == "serial":
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
     rows, recorded = [], []
     for seed in seeds:
         started, cpu = time.perf_counter(), time.process_time()
@@ -128,7 +128,7 @@ def timeline_child(variant, out, fmu_dir, runs, stop_time):
 
 def warm_overhead(fmu_dir, work, runs, stop_time):
     """Per run in one warm worker: (total, stepping, overhead) in s for runs 2..N."""
-    import orchestrator.master as master
+    import orchestrator.run.master as master
     from orchestrator.scenario import load_scenario
     from orchestrator.sweep.worker import RunTask, WarmInstances, run_task
 

@@ -18,7 +18,7 @@ __all__ = ["console_main", "main"]
 
 
 def _cmd_build(args):
-    from orchestrator.build import FMU_PACKAGES, build_all
+    from orchestrator.build.fmus import FMU_PACKAGES, build_all
 
     names = args.names or None
     for name in names or []:
@@ -34,7 +34,7 @@ def _cmd_build(args):
 
 
 def _write_ssp(out):
-    from orchestrator.build import REPO_ROOT, write_ssp_archive
+    from orchestrator.build.fmus import REPO_ROOT, write_ssp_archive
 
     ssd = out / "SystemStructure.ssd"
     if not ssd.is_file():
@@ -43,7 +43,7 @@ def _write_ssp(out):
 
 
 def _cmd_validate(args):
-    from orchestrator.validate import validate_fmus
+    from orchestrator.build.validation import validate_fmus
 
     paths = args.fmus or sorted(Path(args.dir).glob("*.fmu"))
     if not paths:
@@ -61,7 +61,7 @@ def _cmd_validate(args):
 
 
 def _cmd_run(args):
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
     from orchestrator.scenario import load_scenario, parse_seconds
 
     record_interval = parse_seconds(args.record_interval, "--record-interval")

@@ -2,7 +2,7 @@
 
 import pytest
 
-from orchestrator.build import FMU_PACKAGES, REPO_ROOT, build_all
+from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT, build_all
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -46,7 +46,7 @@ def keep_fmu_binaries_loaded():
 
     ``fmpy.simulate_fmu`` frees each FMU's shared library when it is done; unloading a
     pythonfmu binary inside a Python host leaves the interpreter liable to crash later (seen
-    as segfaults in unrelated tests). :class:`orchestrator.fmu.FmuInstance` never unloads; this
+    as segfaults in unrelated tests). :class:`orchestrator.fmu.handle.FmuInstance` never unloads; this
     keeps direct ``simulate_fmu`` calls in tests equally safe.
     """
     from fmpy.fmi1 import _FMU

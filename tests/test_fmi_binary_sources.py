@@ -1,6 +1,6 @@
 """The FMI binary's identity: which C sources a library was compiled from.
 
-The library is compiled by ``make`` from every ``*.c`` and ``*.h`` in ``orchestrator/fmi_binary``
+The library is compiled by ``make`` from every ``*.c`` and ``*.h`` in ``orchestrator/build/fmi_binary``
 and carries the sha256 of those sources; ``sonotrack build`` refuses a library whose hash is not
 that of the sources in the checkout. These tests check that the hash covers every source file,
 that ``make`` rebuilds on a change to any of them, and that a stale library is refused.
@@ -12,8 +12,8 @@ import subprocess
 import pytest
 
 from components.common.errors import BuildError
-from orchestrator.build import REPO_ROOT
-from orchestrator.fmi_binary import (HERE, LIBRARY, SOURCES, install_binary, library_source_hash,
+from orchestrator.build.fmus import REPO_ROOT
+from orchestrator.build.fmi_binary import (HERE, LIBRARY, SOURCES, install_binary, library_source_hash,
                                      source_hash)
 
 SOURCE_NAMES = [path.name for path in SOURCES]

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from orchestrator.geometry import tangent_arc_path
+from orchestrator.reproduce.geometry import tangent_arc_path
 
 from .experiments import TABLE13_TARGET
 from .measures import arrival_figures, tracking_figures, wheel_profile

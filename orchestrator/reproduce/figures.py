@@ -9,8 +9,8 @@ each other, a panel shows their paired difference instead. :func:`write_figures`
 
 import numpy as np
 
-from orchestrator.geometry import distance_to_path
-from orchestrator.matplotlib_agg import pyplot
+from orchestrator.reproduce.geometry import distance_to_path
+from orchestrator.report.matplotlib_agg import pyplot
 
 from .analysis import CASE_TARGETS, reference_path
 from .plotting import COLOURS, band, paths, save, traces

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from orchestrator.geometry import (apex_offsets, arrival_time, circle_fit_radius,
+from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_fit_radius,
                                    path_length, path_rmse)
 
 __all__ = ["DEFINITIONS", "ENCODER_PPR", "NOMINAL_WHEEL_RADIUS", "SLIP_THRESHOLD",

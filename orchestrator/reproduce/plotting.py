@@ -7,7 +7,7 @@ A time series over a cell's runs is drawn as its mean with the 95 % interval of 
 import numpy as np
 from scipy import stats
 
-from orchestrator.matplotlib_agg import pyplot
+from orchestrator.report.matplotlib_agg import pyplot
 
 from .statistics import CONFIDENCE
 

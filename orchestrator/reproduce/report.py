@@ -3,7 +3,7 @@
 Every path in the written files is relative to the report's folder (figures as
 ``figures/fig07_....png``, runs as ``runs/<experiment>/runs/<hash>``), so the folder can be
 moved or published as it is. The HTML is written by the shared
-:mod:`orchestrator.html_report` module with the figures embedded.
+:mod:`orchestrator.report.html` module with the figures embedded.
 """
 
 import json
@@ -276,7 +276,7 @@ class Report:
 
 def _write_html(report, out_dir):
     """The same content as the Markdown, through the shared self-contained HTML writer."""
-    from orchestrator.html_report import Column, HtmlReport
+    from orchestrator.report.html import Column, HtmlReport
 
     level = int(round(100 * CONFIDENCE))
     st = report.settings

@@ -13,7 +13,7 @@ import tomllib
 from pathlib import Path
 
 from components.common.errors import ConfigError
-from orchestrator.faults import check_faults
+from orchestrator.scenario.faults import check_faults
 
 from .locations import resolve_file_parameters, resolve_system_path
 from .model import Scenario
@@ -36,7 +36,7 @@ def scenario_from_dict(data, source="<dict>", base_dir=None, allow_outside=False
         Directory that a relative ``system`` is resolved from, and whose ``../fmus`` holds the
         default system; without it, the current directory and the repository's ``fmus/``.
         File-valued parameters (``source.path = "waypoints.csv"``) resolve from it too and
-        must stay inside it (:mod:`orchestrator.paths`).
+        must stay inside it (:mod:`orchestrator.files.paths`).
     allow_outside : bool
         Accept file-valued parameters that lead outside ``base_dir``.
 

@@ -4,7 +4,7 @@ A relative ``system`` resolves from the scenario file's folder (the current dire
 scenario given as a dict without ``base_dir``); without ``system``, the ``.ssd`` is
 ``<scenario folder>/../fmus/SystemStructure.ssd`` or the repository's. File-valued parameters
 (``source.path = "waypoints.csv"``) resolve from the scenario's folder and must stay inside it
-unless ``allow_outside`` (:mod:`orchestrator.paths`).
+unless ``allow_outside`` (:mod:`orchestrator.files.paths`).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def resolve_system_path(check, system, given, base_dir):
 
 def resolve_file_parameters(check, parameters, base_dir, allow_outside):
     """File-valued parameters as absolute paths, resolved from the scenario's folder."""
-    from orchestrator.paths import confine, names_a_file
+    from orchestrator.files.paths import confine, names_a_file
 
     resolved = dict(parameters)
     for key, value in parameters.items():

@@ -12,7 +12,7 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from orchestrator.faults import faults_to_dicts
+from orchestrator.scenario.faults import faults_to_dicts
 
 from .schema import DEFAULT_MAX_STEPS
 
@@ -49,7 +49,7 @@ class Scenario:
     max_steps : int
         Largest number of base steps accepted (a bound on the work, not a result input).
     faults : tuple of (str, Fault)
-        ``(target instance, fault)`` per ``[[faults]]`` entry (:mod:`orchestrator.faults`).
+        ``(target instance, fault)`` per ``[[faults]]`` entry (:mod:`orchestrator.scenario.faults`).
     source : str
         Where the scenario came from (file path or ``"<dict>"``); not part of equality.
     """

@@ -99,7 +99,7 @@ SCHEMA = {
     "max_steps": Field("integer", default=DEFAULT_MAX_STEPS, minimum=1, maximum=MAX_STEPS_LIMIT,
                        help="largest stop_time / base_step accepted (a bound on the work)"),
     "faults": Field("faults", default=(), help="[[faults]] entries: kind, target, start, "
-                                               "end, magnitude (orchestrator/faults.py)"),
+                                               "end, magnitude (orchestrator/scenario/faults.py)"),
 }
 
 KIND_TEXT = {

@@ -72,7 +72,7 @@ class ParameterValue:
 
     def run_value(self):
         """The value a run passes to the FMU: a relative file path resolved from ``origin``."""
-        from orchestrator.paths import names_a_file
+        from orchestrator.files.paths import names_a_file
 
         if self.origin is not None and self.type == "String" and names_a_file(self.value):
             return str((Path(self.origin) / self.value).resolve())

@@ -2,7 +2,7 @@
 
 A component's ``ssd:ParameterBindings`` hold either an inline ``ssv:ParameterSet`` or a
 ``source`` naming an ``.ssv`` file (resolved from the ``.ssd``'s folder and, unless
-``allow_outside``, confined to it; see :mod:`orchestrator.paths`). Each value is converted to
+``allow_outside``, confined to it; see :mod:`orchestrator.files.paths`). Each value is converted to
 the Python type of its SSP type and refused when it can never be a parameter (a NaN Real, an
 Integer that does not fit an fmi2Integer); whether it fits the FMU is checked later by
 :mod:`orchestrator.system`.
@@ -53,7 +53,7 @@ def _convert(type_name, text):
 
 
 def read_parameter_set(parameter_set, problems, directory=None, allow_outside=False):
-    from orchestrator.paths import confine, names_a_file
+    from orchestrator.files.paths import confine, names_a_file
 
     parameters = {}
     values = first_child(parameter_set, ssv_tag("Parameters"))
@@ -86,7 +86,7 @@ def read_parameter_set(parameter_set, problems, directory=None, allow_outside=Fa
 
 
 def read_parameter_bindings(component, bindings, directory, problems, allow_outside=False):
-    from orchestrator.paths import confine
+    from orchestrator.files.paths import confine
 
     parameters = {}
     for binding in child_elements(bindings, ssd_tag("ParameterBinding")):

@@ -126,7 +126,7 @@ def read_ssd(path, allow_outside=False):
     allow_outside : bool
         Accept ``.ssv`` files and waypoint CSVs outside the folder of the file that names them
         (``.ssv`` files resolve from the ``.ssd``'s folder, CSVs from their own file's folder;
-        see :mod:`orchestrator.paths`).
+        see :mod:`orchestrator.files.paths`).
 
     Returns
     -------

@@ -148,7 +148,7 @@ def _absolute_files(overrides):
     folder the command runs in; made absolute here, it names the same file for every worker,
     whatever their working folder (the table keeps the value as given).
     """
-    from orchestrator.paths import names_a_file
+    from orchestrator.files.paths import names_a_file
 
     return {key: str(Path(value).resolve()) if names_a_file(value) else value
             for key, value in overrides.items()}
@@ -172,7 +172,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
     system : orchestrator.system.System, optional
         The base scenario's system, if already loaded.
     allow_outside : bool
-        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.files.paths`).
 
     Returns
     -------
@@ -184,7 +184,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
     ConfigError
         Listing every problem found.
     """
-    from orchestrator.run import instance_parameters
+    from orchestrator.run.runner import instance_parameters
     from orchestrator.sweep.inputs import input_digests, run_key
     from orchestrator.system import load_system
 
@@ -229,7 +229,7 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     fmu_dir : path-like, optional
         Folder of the FMUs, if not beside the ``.ssd``.
     allow_outside : bool
-        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.files.paths`).
     systems : dict, optional
         ``.ssd`` path (as in ``scenario.system``) to its system, already loaded with the same
         ``fmu_dir``.
@@ -244,7 +244,7 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     ConfigError
         Listing every problem found.
     """
-    from orchestrator.run import instance_parameters
+    from orchestrator.run.runner import instance_parameters
     from orchestrator.sweep.inputs import input_digests, run_key
     from orchestrator.system import load_system
 

@@ -240,7 +240,7 @@ def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers
     record_interval : float
         Simulated seconds between recorded rows of each run.
     allow_outside : bool
-        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.paths`).
+        Let the ``.ssd`` name files outside its folder (see :mod:`orchestrator.files.paths`).
 
     Returns
     -------

@@ -107,7 +107,7 @@ class WarmInstances:
 
     def acquire(self, instance_name, fmu_path, digest):
         """A warm instance for this run, or a new reusable one."""
-        from orchestrator.fmu import FmuInstance
+        from orchestrator.fmu.handle import FmuInstance
 
         key = (instance_name, str(fmu_path), digest)
         with self._lock:
@@ -202,7 +202,7 @@ def prepare(ssd_path, fmu_dir, allow_outside=False):
     """Load, in this process, what every worker's first run needs and a fork can share.
 
     The system of ``ssd_path`` (its ``.ssd`` and the FMUs' model descriptions) is kept in this
-    process's :class:`WarmInstances`, and each FMU is unpacked (:func:`orchestrator.fmu.
+    process's :class:`WarmInstances`, and each FMU is unpacked (:func:`orchestrator.fmu.handle.
     extract_once`); workers forked afterwards inherit both instead of redoing them.
 
     Returns
@@ -215,7 +215,7 @@ def prepare(ssd_path, fmu_dir, allow_outside=False):
         As :func:`orchestrator.system.load_system`. An FMU that cannot be unpacked is left
         for its runs to report.
     """
-    from orchestrator.fmu import extract_once
+    from orchestrator.fmu.handle import extract_once
 
     system = _WARM.system(ssd_path, fmu_dir, allow_outside)
     for component in system.components:
@@ -269,7 +269,7 @@ def warm_up(tasks, folder, warm=None):
 
 def _run(task, warm):
     from components.common.errors import ConfigError
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
 
     scenario = task.scenario
     system = warm.system(scenario.system, task.fmu_dir, task.allow_outside)

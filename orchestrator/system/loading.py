@@ -131,7 +131,7 @@ def load_system(ssd_path, fmu_dir=None, allow_unconnected=(), allow_outside=Fals
         Listing every problem :func:`check_system` finds, plus FMUs that are missing or cannot
         be read.
     """
-    from orchestrator.fmu import model_description
+    from orchestrator.fmu.handle import model_description
 
     description = read_ssd(ssd_path, allow_outside=allow_outside)
     base = Path(fmu_dir) if fmu_dir is not None else description.directory

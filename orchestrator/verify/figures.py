@@ -6,7 +6,7 @@ returns ``name -> (path, caption)``; the Markdown links them, the HTML embeds th
 
 import numpy as np
 
-from orchestrator.matplotlib_agg import pyplot
+from orchestrator.report.matplotlib_agg import pyplot
 
 __all__ = ["write_figures"]
 

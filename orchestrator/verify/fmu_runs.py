@@ -4,7 +4,7 @@
 - :func:`controller_fmu_comparison`: WheelController FMU, random inputs, against the law
   recomputed independently here.
 - :func:`closed_loop_fmu_comparison`: RobotPlant + WheelController FMUs connected and run by
-  :class:`orchestrator.master.Master` at the loop's period, against the closed-loop TF.
+  :class:`orchestrator.run.master.Master` at the loop's period, against the closed-loop TF.
 """
 
 import math
@@ -69,8 +69,8 @@ def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, f
     """
     import control
 
-    from orchestrator.build import build_fmu
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.build.fmus import build_fmu
+    from orchestrator.fmu.handle import FmuInstance
 
     p = parameters or PlantParameters()
     model = linear_wheel_model(p)
@@ -250,8 +250,8 @@ def controller_fmu_comparison(settings, modes=("fgs_pd", "pd", "pid"), samples=6
         Per mode: largest |voltage difference| [V], largest kp/kd difference, and how many
         samples had ``|e_n| > 1`` or ``|de_n| > 1`` (outside the fuzzy universe).
     """
-    from orchestrator.build import build_fmu
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.build.fmus import build_fmu
+    from orchestrator.fmu.handle import FmuInstance
 
     inputs = _controller_inputs(settings, samples, seed)
     runs = {}
@@ -319,9 +319,9 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
     """
     import control
 
-    from orchestrator.build import build_fmu
-    from orchestrator.fmu import FmuInstance
-    from orchestrator.master import InstanceSpec, Link, Master
+    from orchestrator.build.fmus import build_fmu
+    from orchestrator.fmu.handle import FmuInstance
+    from orchestrator.run.master import InstanceSpec, Link, Master
 
     T = model.period
     steps = int(round(duration / T))

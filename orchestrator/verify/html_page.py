@@ -1,6 +1,6 @@
-"""``verification.html``: the self-contained page, built with :mod:`orchestrator.html_report`."""
+"""``verification.html``: the self-contained page, built with :mod:`orchestrator.report.html`."""
 
-from orchestrator.html_report import Column, HtmlReport
+from orchestrator.report.html import Column, HtmlReport
 
 from .markdown import EDGE_TIME_CONSTANTS, LIMITS, edge_rows, edge_statements, findings
 
@@ -8,7 +8,7 @@ __all__ = ["html_report"]
 
 
 def html_report(report, model, strict=False):
-    """The :class:`orchestrator.html_report.HtmlReport` of a verification report.
+    """The :class:`orchestrator.report.html.HtmlReport` of a verification report.
 
     Parameters
     ----------

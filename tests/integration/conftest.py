@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.build import REPO_ROOT, build_fmu
+from orchestrator.build.fmus import REPO_ROOT, build_fmu
 
 from .fmi_binary_support import (C_HOST_SOURCE, LEAK_SUPPRESSIONS, NAMES, PROBE_RANGES, PROBE_SOURCE,
                                  fmi_headers)

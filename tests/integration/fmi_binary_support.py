@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.build import FMU_PACKAGES
+from orchestrator.build.fmus import FMU_PACKAGES
 
 from .test_fmus import DRIVES
 

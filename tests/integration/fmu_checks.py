@@ -7,7 +7,7 @@ import subprocess
 import sys
 import textwrap
 
-from orchestrator.fmu import FmuInstance
+from orchestrator.fmu.handle import FmuInstance
 
 # Runs an FMU in a child Python that can import numpy and fmpy but not this repository:
 # an import hook refuses `components` and `orchestrator`, so the FMU must use its own copy.

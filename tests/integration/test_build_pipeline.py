@@ -7,9 +7,9 @@ from xml.etree import ElementTree
 
 import pytest
 
-from orchestrator.build import REPO_ROOT, build_fmu
-from orchestrator.fmu import FmuInstance
-from orchestrator.validate import validate_fmu
+from orchestrator.build.fmus import REPO_ROOT, build_fmu
+from orchestrator.fmu.handle import FmuInstance
+from orchestrator.build.validation import validate_fmu
 
 from .fmu_checks import run_isolated, run_libcosim, same_bits, state_round_trip, step_and_record
 

@@ -11,8 +11,8 @@ import time
 import numpy as np
 import pytest
 
-from orchestrator.build import REPO_ROOT
-from orchestrator.run import run_scenario
+from orchestrator.build.fmus import REPO_ROOT
+from orchestrator.run.runner import run_scenario
 from orchestrator.scenario import scenario_from_dict
 from orchestrator.ssp import read_ssd, write_ssd
 
@@ -83,7 +83,7 @@ def test_a_killed_run_leaves_a_readable_csv(fmu_dir, tmp_path):
 
 
 def test_libcosim_and_our_jacobi_master_agree(fmu_dir, tmp_path):
-    from orchestrator.crosscheck import run_libcosim_ssd
+    from orchestrator.hosts.libcosim import run_libcosim_ssd
 
     step, stop = 0.01, 10.0
     ssd = fmu_dir / "SingleRate.ssd"

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from components.planner.odometry_check import TRIPS_AFTER
-from orchestrator.results import read_results
-from orchestrator.run import run_scenario
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import run_scenario
 from orchestrator.scenario import load_scenario
 
 pytestmark = pytest.mark.integration

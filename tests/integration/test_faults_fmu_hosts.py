@@ -47,9 +47,9 @@ def test_libcosim_applies_a_fault_from_the_ssd_like_our_master(fmu_dir, tmp_path
     import csv
     import shutil
 
-    from orchestrator.build import FMU_PACKAGES, REPO_ROOT
-    from orchestrator.crosscheck import run_libcosim_ssd
-    from orchestrator.run import run_scenario
+    from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT
+    from orchestrator.hosts.libcosim import run_libcosim_ssd
+    from orchestrator.run.runner import run_scenario
     from orchestrator.scenario import scenario_from_dict
     from orchestrator.ssp import ParameterValue, read_ssd, ssd_to_string
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.results import read_results
+from orchestrator.run.results import read_results
 
 pytestmark = pytest.mark.integration
 

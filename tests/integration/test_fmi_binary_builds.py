@@ -1,6 +1,6 @@
 """Build identity: two builds of one model whose code differs, loaded in one process (both
 orders), each run their own code, because each build's cores live under a package named after
-a hash of its sources (orchestrator.fmi_binary.build_tag). The C library's own identity (which
+a hash of its sources (orchestrator.build.fmi_binary.build_tag). The C library's own identity (which
 sources it was compiled from) is checked in tests/test_fmi_binary_sources.py.
 """
 
@@ -12,7 +12,7 @@ import textwrap
 
 import pytest
 
-from orchestrator.build import REPO_ROOT, build_fmu
+from orchestrator.build.fmus import REPO_ROOT, build_fmu
 
 pytestmark = pytest.mark.integration
 

@@ -196,7 +196,7 @@ def test_refusals_and_round_trips_under_address_and_undefined_behaviour_sanitize
     """Every refusal class, a '%' in names and messages, strings and FMU states, through the
     sanitized library in a Python host (the ASan runtime preloaded): no finding, and the same
     statuses, messages and numbers as the shipped library gives."""
-    from orchestrator.build import REPO_ROOT
+    from orchestrator.build.fmus import REPO_ROOT
 
     _, library, _, runtime = sanitized
     folder, description = extracted["WheelController"]

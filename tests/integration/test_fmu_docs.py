@@ -6,8 +6,8 @@ from xml.etree import ElementTree
 
 import pytest
 
-from orchestrator.build import FMU_PACKAGES, REPO_ROOT
-from orchestrator.fmu_docs import DOCUMENTATION_FILE, documentation_problems
+from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT
+from orchestrator.build.documentation import DOCUMENTATION_FILE, documentation_problems
 
 pytestmark = pytest.mark.integration
 

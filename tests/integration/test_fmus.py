@@ -4,8 +4,8 @@ import math
 
 import pytest
 
-from orchestrator.build import FMU_PACKAGES
-from orchestrator.validate import validate_fmu
+from orchestrator.build.fmus import FMU_PACKAGES
+from orchestrator.build.validation import validate_fmu
 
 from .fmu_checks import run_isolated, run_libcosim, same_bits, state_round_trip, step_and_record
 
@@ -56,7 +56,7 @@ def test_state_round_trip_is_bit_identical(fmu_paths, name):
 
 @pytest.mark.parametrize("name", NAMES, ids=NAMES)
 def test_libcosim_gives_the_same_outputs_as_fmpy(fmu_paths, name):
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.fmu.handle import FmuInstance
 
     from .fmu_checks import outputs_of
 
@@ -83,7 +83,7 @@ WITH_INPUTS = [name for name in NAMES if name != "SoundSource"]
 def test_a_non_finite_input_gives_an_error_status_naming_port_and_value(fmu_paths, name, bad):
     from fmpy.fmi1 import FMICallException
 
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.fmu.handle import FmuInstance
 
     h, drive = DRIVES[name]
     inputs = drive(0.0)
@@ -106,7 +106,7 @@ def test_a_non_finite_input_gives_an_error_status_naming_port_and_value(fmu_path
 
 
 def test_plant_clamps_a_voltage_beyond_the_supply_and_logs_it_once(fmu_paths):
-    from orchestrator.fmu import FmuInstance
+    from orchestrator.fmu.handle import FmuInstance
 
     instance = FmuInstance(fmu_paths["RobotPlant"], "clamp")
     instance.instantiate()

@@ -6,7 +6,7 @@ import zipfile
 import fmpy
 import pytest
 
-from orchestrator.build import FMU_PACKAGES
+from orchestrator.build.fmus import FMU_PACKAGES
 
 from .feedthrough import declared_dependencies, feedthrough_mismatches, measured_dependencies
 from .test_fmus import DRIVES

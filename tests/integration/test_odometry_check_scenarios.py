@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.results import read_results
-from orchestrator.run import run_scenario
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import run_scenario
 from orchestrator.scenario import load_scenario
 
 pytestmark = pytest.mark.integration

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from orchestrator.fmu import FmuInstance
+from orchestrator.fmu.handle import FmuInstance
 
 from .fmu_checks import run_isolated, same_bits, state_round_trip
 

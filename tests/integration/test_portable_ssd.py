@@ -12,12 +12,12 @@ import fmpy
 import numpy as np
 import pytest
 
-from orchestrator.build import FMU_PACKAGES, REPO_ROOT
-from orchestrator.run import run_scenario
+from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT
+from orchestrator.run.runner import run_scenario
 from orchestrator.scenario import scenario_from_dict
 from orchestrator.ssp import read_ssd
 
-from orchestrator.ecos_host import ecos_binary, read_ecos_csv, run_ecos
+from orchestrator.hosts.ecos import ecos_binary, read_ecos_csv, run_ecos
 from .test_fmus import DRIVES
 
 pytestmark = pytest.mark.integration
@@ -52,7 +52,7 @@ def _our_jacobi_run(ssd, stop_time, out_dir):
 
 
 def test_libcosim_runs_the_ssd_with_no_step_size_like_our_jacobi_master(system_dir, tmp_path):
-    from orchestrator.crosscheck import run_libcosim_ssd
+    from orchestrator.hosts.libcosim import run_libcosim_ssd
 
     stop = 5.0
     columns = ["plant.x", "plant.y", "plant.heading", "source.x", "source.y",

@@ -14,8 +14,8 @@ from xml.etree import ElementTree
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from orchestrator.build import FMU_PACKAGES
-from orchestrator.fmu import FmuInstance
+from orchestrator.build.fmus import FMU_PACKAGES
+from orchestrator.fmu.handle import FmuInstance
 from orchestrator.scenario import model_ranges
 
 from .test_fmus import DRIVES

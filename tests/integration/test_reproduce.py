@@ -9,7 +9,7 @@ import re
 
 import pytest
 
-from orchestrator.html_report import embedded_image_sources
+from orchestrator.report.html import embedded_image_sources
 from orchestrator.reproduce import reproduce
 from tests.html_render import ChromiumUnavailable, render_image_count
 

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from orchestrator.build import REPO_ROOT
+from orchestrator.build.fmus import REPO_ROOT
 
 pytestmark = pytest.mark.integration
 
@@ -61,7 +61,7 @@ def test_a_plot_that_cannot_be_drawn_is_reported_and_recorded(fmu_dir, tmp_path,
                                                               capsys):
     """A renderer failure: one line, exit status 1, the reason in the summary; the results
     and the figures that could be drawn stay."""
-    from orchestrator import plot_renderer
+    from orchestrator.run import plot_renderer
     from orchestrator.cli import main
 
     monkeypatch.setattr(plot_renderer, "FIGURE_SHARES",

@@ -1,6 +1,6 @@
 """A run's summary figures, kept row by row while it steps, equal the re-read of its file.
 
-The reference is :func:`orchestrator.run_metrics.summary_figures_from_csv`: the chunked
+The reference is :func:`orchestrator.run.summary.summary_figures_from_csv`: the chunked
 re-read of ``results.csv`` the summary used to be computed with.
 """
 
@@ -9,10 +9,10 @@ import math
 
 import pytest
 
-from orchestrator import run_metrics
-from orchestrator.build import REPO_ROOT
-from orchestrator.run import run_scenario
-from orchestrator.run_metrics import summary_figures_from_csv
+from orchestrator.run import summary as run_metrics
+from orchestrator.build.fmus import REPO_ROOT
+from orchestrator.run.runner import run_scenario
+from orchestrator.run.summary import summary_figures_from_csv
 from orchestrator.scenario import load_scenario
 from tests.json_leaves import leaves
 

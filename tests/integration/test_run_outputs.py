@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.outputs import read_summary
-from orchestrator.plots import PLOT_FILES
-from orchestrator.results import count_rows, read_results
+from orchestrator.run.folder import read_summary
+from orchestrator.run.plots import PLOT_FILES
+from orchestrator.run.results import count_rows, read_results
 
 pytestmark = pytest.mark.integration
 
@@ -190,10 +190,10 @@ def test_out_that_cannot_hold_results_is_one_line(fmu_dir, tmp_path, where):
 
 def test_a_failed_run_says_failed_and_keeps_its_rows(fmu_dir, tmp_path):
     """An FMU refusing a step mid-run: summary failed with the reason, rows so far kept."""
-    from orchestrator.run import run_scenario
+    from orchestrator.run.runner import run_scenario
     from orchestrator.scenario import load_scenario
     from components.common.errors import SimulationError
-    from orchestrator import master as master_module
+    from orchestrator.run import master as master_module
 
     scenario = load_scenario(_scenario(tmp_path, 5.0))
     original = master_module.Master.step

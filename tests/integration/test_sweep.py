@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.build import REPO_ROOT
-from orchestrator.dask_cluster import start_cluster, stop_cluster
-from orchestrator.run import run_scenario
+from orchestrator.build.fmus import REPO_ROOT
+from orchestrator.sweep.dask_cluster import start_cluster, stop_cluster
+from orchestrator.run.runner import run_scenario
 from orchestrator.scenario import load_scenario
 from orchestrator.sweep import plan_runs, sweep
 from orchestrator.sweep.runs import _warm_up_tasks
@@ -128,7 +128,7 @@ def test_a_failed_run_is_a_row_and_the_sweep_goes_on(fmu_dir, tmp_path):
 
 _FRESH_RUN = """
 import pickle, sys
-from orchestrator.run import run_scenario
+from orchestrator.run.runner import run_scenario
 scenario, out, fmu_dir = pickle.load(open(sys.argv[1], "rb"))
 run_scenario(scenario, out, progress=False, fmu_dir=fmu_dir, plots=False)
 """
@@ -338,7 +338,7 @@ def test_a_task_that_kills_its_worker_fails_alone(tmp_path):
 def test_a_worker_notices_an_fmu_rebuilt_in_place(fmu_dir, tmp_path):
     import zipfile
 
-    from orchestrator.fmu import extract_once
+    from orchestrator.fmu.handle import extract_once
 
     for fmu in Path(fmu_dir).glob("*.fmu"):
         shutil.copy(fmu, tmp_path / fmu.name)

@@ -11,7 +11,7 @@ import pytest
 
 from components.control import DEFAULTS
 from components.plant import PlantParameters
-from orchestrator.html_report import embedded_image_sources
+from orchestrator.report.html import embedded_image_sources
 from orchestrator.verify import (
     WheelLoopModel, closed_loop_fmu_comparison, compliance_bound, controller_fmu_comparison,
     fmu_step_comparison, load_requirements, verify,

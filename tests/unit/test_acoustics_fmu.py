@@ -94,7 +94,7 @@ def test_unhearable_source_is_invalid_not_an_error(source):
 def test_built_fmu_runs_in_fmpy(tmp_path):
     from fmpy import simulate_fmu
 
-    from orchestrator.build import build_fmu
+    from orchestrator.build.fmus import build_fmu
 
     fmu = build_fmu("AcousticLocalizer", tmp_path)
     with zipfile.ZipFile(fmu) as archive:

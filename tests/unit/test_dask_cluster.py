@@ -6,7 +6,7 @@ import sys
 import pytest
 
 from components.common.errors import SimulationError
-from orchestrator.dask_cluster import scheduler_address
+from orchestrator.sweep.dask_cluster import scheduler_address
 
 # Writes the file in two pieces, as a scheduler's non-atomic write can be seen, then lives on.
 _SLOW_WRITER = """

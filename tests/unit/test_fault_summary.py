@@ -5,7 +5,7 @@ import math
 import pytest
 
 from components.common.faults import Fault
-from orchestrator.fault_metrics import SLIP_THRESHOLD, fault_summary_from_csv
+from orchestrator.run.fault_metrics import SLIP_THRESHOLD, fault_summary_from_csv
 
 _COLUMNS = ("time", "plant.x", "plant.y", "source.x", "source.y", "plant.speed",
             "plant.slip_left", "plant.slip_right", "localizer.fix_attempts",

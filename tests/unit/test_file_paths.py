@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.paths import confine, names_a_file
+from orchestrator.files.paths import confine, names_a_file
 from orchestrator.scenario import load_scenario
 from orchestrator.ssp import ComponentDescription, SystemDescription, read_ssd, ssd_to_string
 

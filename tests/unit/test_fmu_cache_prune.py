@@ -14,14 +14,14 @@ from pathlib import Path
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.extract import cache_limits, extract_fmu, prune_cache
+from orchestrator.fmu.cache import cache_limits, extract_fmu, prune_cache
 
 REPO = Path(__file__).resolve().parents[2]
-_EXTRACT = "import sys; from orchestrator.extract import extract_fmu; print(extract_fmu(sys.argv[1]))"
+_EXTRACT = "import sys; from orchestrator.fmu.cache import extract_fmu; print(extract_fmu(sys.argv[1]))"
 # Unpacks its FMU, says where, then reads a file of the entry each time it is asked to.
 _HOLDER = """
 import sys
-from orchestrator.extract import extract_fmu
+from orchestrator.fmu.cache import extract_fmu
 folder = extract_fmu(sys.argv[1])
 print(folder, flush=True)
 for line in sys.stdin:
@@ -123,7 +123,7 @@ def test_a_bad_cache_bound_is_refused_with_its_name(cache, monkeypatch, name, te
 
 _USER = """
 import sys, time
-from orchestrator.extract import extract_fmu
+from orchestrator.fmu.cache import extract_fmu
 for path in sys.argv[1:]:
     folder = extract_fmu(path)
     time.sleep(0.05)   # others prune meanwhile

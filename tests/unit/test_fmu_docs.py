@@ -1,9 +1,9 @@
-"""FMU metadata from pyproject.toml (orchestrator.fmu_docs), without building an FMU."""
+"""FMU metadata from pyproject.toml (orchestrator.build.documentation), without building an FMU."""
 
 import pytest
 
 from components.common.errors import BuildError
-from orchestrator.fmu_docs import documentation_page, project_metadata
+from orchestrator.build.documentation import documentation_page, project_metadata
 
 PYPROJECT = """
 [project]

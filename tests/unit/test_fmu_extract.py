@@ -8,7 +8,7 @@ import zipfile
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.extract import cache_dir, check_archive, extract_fmu
+from orchestrator.fmu.cache import cache_dir, check_archive, extract_fmu
 
 
 @pytest.fixture
@@ -71,7 +71,7 @@ def test_a_512_mb_zero_entry_is_refused_before_it_is_unpacked(cache, tmp_path):
 def test_the_cap_is_also_enforced_while_unpacking(cache, tmp_path, monkeypatch):
     """Sizes declared by the archive are not trusted alone: the bytes written are counted."""
     fmu = _fmu(tmp_path / "a.fmu", [("resources/big.bin", bytes(10_000))])
-    monkeypatch.setattr("orchestrator.extract.check_archive",
+    monkeypatch.setattr("orchestrator.fmu.cache.check_archive",
                         lambda path, limit: zipfile.ZipFile(path).infolist())
     monkeypatch.setenv("SONOTRACK_FMU_MAX_BYTES", "5000")
     with pytest.raises(ConfigError, match="past the cap of 5000"):
@@ -92,7 +92,7 @@ def test_cache_is_by_content_and_reused(cache, tmp_path, monkeypatch):
     assert first.parent == cache / "fmus" and len(first.name) == 64
     assert (first / "binaries" / "linux64" / "model.so").read_bytes()[:4] == b"\x7fELF"
     calls = []
-    monkeypatch.setattr("orchestrator.extract._unpack", lambda *a: calls.append(a))
+    monkeypatch.setattr("orchestrator.fmu.cache._unpack", lambda *a: calls.append(a))
     copy = tmp_path / "elsewhere" / "same.fmu"
     copy.parent.mkdir()
     copy.write_bytes(fmu.read_bytes())
@@ -142,8 +142,8 @@ def test_cache_dir_follows_the_environment(monkeypatch, tmp_path):
 def test_a_missing_fmu_is_one_clear_error(cache, tmp_path, loader):
     # extract_once stats the file to notice a rebuild in place; a missing file must still be the
     # one-line ConfigError naming it, not a bare FileNotFoundError
-    import orchestrator.fmu as fmu_module
-    import orchestrator.extract as extract_module
+    import orchestrator.fmu.handle as fmu_module
+    import orchestrator.fmu.cache as extract_module
 
     load = getattr(fmu_module if loader == "extract_once" else extract_module, loader)
     missing = tmp_path / "gone.fmu"

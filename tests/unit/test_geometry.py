@@ -1,4 +1,4 @@
-"""Path geometry and run figures of orchestrator.geometry against analytic values."""
+"""Path geometry and run figures of orchestrator.reproduce.geometry against analytic values."""
 
 import math
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.geometry import (apex_offsets, arrival_time, circle_fit_radius,
+from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_fit_radius,
                                    distance_to_path, path_length, path_rmse, resample_path,
                                    tangent_arc_path)
 
@@ -127,7 +127,7 @@ def test_apex_offsets_signs_inside_and_outside():
 
 
 def test_distance_to_path_equals_the_segment_distance_of_metrics():
-    from orchestrator.metrics import distance_to_polyline
+    from orchestrator.run.metrics import distance_to_polyline
 
     rng = np.random.default_rng(1)
     polyline = np.cumsum(rng.normal(size=(300, 2)), axis=0)

@@ -9,7 +9,7 @@ import zlib
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.html_report import (
+from orchestrator.report.html import (
     Column, HtmlReport, embedded_image_sources, link, png_data_uri,
 )
 from tests.html_render import ChromiumUnavailable, chromium_path, render_image_count

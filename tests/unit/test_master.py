@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import pytest
 
 from components.common.errors import ConfigError, SimulationError
-from orchestrator.master import InstanceSpec, Link, Master
+from orchestrator.run.master import InstanceSpec, Link, Master
 
 
 class _Group:

@@ -29,7 +29,7 @@ font_manager.json_dump(manager, Path(matplotlib.get_cachedir(),
 _DRAW = """
 import sys
 if sys.argv[1] == "ours":
-    from orchestrator.matplotlib_agg import pyplot
+    from orchestrator.report.matplotlib_agg import pyplot
     plt = pyplot()
 else:
     import matplotlib

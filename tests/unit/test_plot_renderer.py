@@ -10,11 +10,11 @@ import time
 import numpy as np
 import pytest
 
-from orchestrator import plot_renderer
-from orchestrator.plot_renderer import PlotError, PlotRenderer
-from orchestrator.plots import PLOT_FILES, plot_run
-from orchestrator.recorder import Recorder
-from orchestrator.results import read_results
+from orchestrator.run import plot_renderer
+from orchestrator.run.plot_renderer import PlotError, PlotRenderer
+from orchestrator.run.plots import PLOT_FILES, plot_run
+from orchestrator.run.recorder import Recorder
+from orchestrator.run.results import read_results
 
 COLUMNS = ["source.x", "source.y", "plant.x", "plant.y", "plant.heading",
            "plant.wheel_speed_left", "plant.wheel_speed_right", "planner.v_ref_left",
@@ -97,7 +97,7 @@ def test_unused_renderers_are_stopped_and_reaped():
 
 _PARENT = """
 import sys, time
-from orchestrator.plot_renderer import PlotRenderer
+from orchestrator.run.plot_renderer import PlotRenderer
 renderer = PlotRenderer()
 print(renderer._process.pid, flush=True)
 time.sleep(60)

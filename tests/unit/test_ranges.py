@@ -11,7 +11,7 @@ from components.common.ranges import ValidRange, load_ranges
 from components.control.controller import MODES as CONTROL_MODES
 from components.control.inference import METHODS
 from components.planner.planner import MODES as PLANNER_MODES
-from orchestrator.build import FMU_PACKAGES
+from orchestrator.build.fmus import FMU_PACKAGES
 
 PARTS = sorted(FMU_PACKAGES.values())
 

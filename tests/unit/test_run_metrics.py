@@ -1,7 +1,7 @@
 """The summary's figures kept row by row (RowTrace) against the chunked re-read of results.csv.
 
 The reference is :func:`summary_figures_from_csv`, which parses the file the
-:class:`~orchestrator.recorder.Recorder` wrote, in blocks of 2,048 rows; the traces below are
+:class:`~orchestrator.run.recorder.Recorder` wrote, in blocks of 2,048 rows; the traces below are
 longer than one block so the chunk boundaries are crossed.
 """
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from components.common.faults import Fault
-from orchestrator.recorder import Recorder
-from orchestrator.run_metrics import (MAX_TRACE_ROWS, RowTrace, summary_figures,
+from orchestrator.run.recorder import Recorder
+from orchestrator.run.summary import (MAX_TRACE_ROWS, RowTrace, summary_figures,
                                       summary_figures_from_csv)
 from tests.json_leaves import leaves
 
@@ -114,7 +114,7 @@ def _segment_distance(px, py, ax, ay, bx, by):
 
 
 def test_distance_to_polyline_against_scalar_geometry():
-    from orchestrator.metrics import distance_to_polyline
+    from orchestrator.run.metrics import distance_to_polyline
 
     rng = np.random.default_rng(3)
     polyline = np.cumsum(rng.normal(size=(60, 2)), axis=0)

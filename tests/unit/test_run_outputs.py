@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator import outputs
-from orchestrator.metrics import tracking_summary, tracking_summary_from_csv
-from orchestrator.outputs import RunFolder, atomic_write_bytes, atomic_write_json, read_summary
-from orchestrator.recorder import Recorder
-from orchestrator.results import count_rows, iter_result_chunks, read_results
+from orchestrator.run import folder as outputs
+from orchestrator.run.metrics import tracking_summary, tracking_summary_from_csv
+from orchestrator.run.folder import RunFolder, atomic_write_bytes, atomic_write_json, read_summary
+from orchestrator.run.recorder import Recorder
+from orchestrator.run.results import count_rows, iter_result_chunks, read_results
 
 
 # ----- atomic writes ------------------------------------------------------------------------

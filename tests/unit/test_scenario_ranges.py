@@ -98,7 +98,7 @@ def test_a_bad_binding_in_the_ssd_is_refused_naming_the_ssd(tmp_path):
 
 
 def test_a_run_whose_metrics_are_not_finite_is_not_ok():
-    from orchestrator.run import _non_finite_metrics
+    from orchestrator.run.runner import _non_finite_metrics
 
     summary = {"status": "ok", "path_rmse_m": float("nan"), "final_distance_to_source_m": 1.0,
                "realtime_factor": float("inf")}
@@ -121,6 +121,6 @@ def test_a_run_whose_metrics_are_not_finite_is_not_ok():
     ("Real", 3, ""), ("Integer", 10, ""), ("Boolean", False, ""), ("String", "pd", ""),
 ], ids=repr)
 def test_fmu_handle_sets_values_without_coercion(type_name, value, problem):
-    from orchestrator.fmu import _type_problem
+    from orchestrator.fmu.handle import _type_problem
 
     assert _type_problem(type_name, value) == problem

@@ -44,7 +44,7 @@ def validate_fmu(path, simulate=True):
     from fmpy.validation import validate_fmu as fmpy_validate
 
     from components.common.errors import ConfigError
-    from orchestrator.extract import extract_fmu
+    from orchestrator.fmu.cache import extract_fmu
 
     try:
         # the same checked, size-capped unpacking a run uses; nothing else runs on a refusal

@@ -9,7 +9,7 @@ flushed, fsync or not). The file is always fsync'ed when the recorder closes, be
 calls itself finished.
 
 Memory does not grow with simulated time: the recorder holds one open file and its buffer.
-Figures and plots are computed afterwards from the file (:mod:`orchestrator.results`).
+Figures and plots are computed afterwards from the file (:mod:`orchestrator.run.results`).
 """
 
 import os

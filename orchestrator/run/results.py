@@ -58,7 +58,7 @@ def iter_result_chunks(path, columns=None, chunk_rows=DEFAULT_CHUNK_ROWS):
     Parameters
     ----------
     path : path-like
-        A ``results.csv`` written by :class:`orchestrator.recorder.Recorder`.
+        A ``results.csv`` written by :class:`orchestrator.run.recorder.Recorder`.
     columns : sequence of str, optional
         Columns to read (default all, ``time`` included).
     chunk_rows : int

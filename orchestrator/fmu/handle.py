@@ -46,7 +46,7 @@ _CTYPE = {"Real": ctypes.c_double, "Integer": ctypes.c_int, "Boolean": ctypes.c_
 
 def extract_once(path):
     """Return (model description, unpacked folder) of an FMU, unpacked safely into the
-    content-addressed cache (:func:`orchestrator.extract.extract_fmu`); once per process and
+    content-addressed cache (:func:`orchestrator.fmu.cache.extract_fmu`); once per process and
     file version (a file rewritten in place is unpacked again).
 
     The folder is named by the digest of the FMU's bytes, so the description parsed for that
@@ -54,7 +54,7 @@ def extract_once(path):
     """
     import fmpy
 
-    from orchestrator.extract import extract_fmu
+    from orchestrator.fmu.cache import extract_fmu
 
     path = Path(path).resolve()
     try:

@@ -9,8 +9,8 @@ its relative imports rewritten to the private package: pythonfmu 0.7.0's binary 
 slave class *defined* in the entry module (a class merely imported there instantiates once and
 then corrupts the interpreter on the second instance, as seen with two WheelControllers). The model description comes out compliant because every slave
 derives from :class:`components.common.slave.SonotrackSlave`; :func:`build_fmu` checks that.
-Then the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.fmi_binary`), and
-finally :mod:`orchestrator.fmu_docs` adds the metadata and ``documentation/index.html``.
+Then the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.build.fmi_binary`), and
+finally :mod:`orchestrator.build.documentation` adds the metadata and ``documentation/index.html``.
 """
 
 import importlib
@@ -24,15 +24,15 @@ from xml.etree import ElementTree
 
 from components import FMU_PACKAGES
 from components.common.errors import BuildError
-from orchestrator.fmi_binary import build_tag, install_binary
-from orchestrator.fmu_docs import document_fmu
+from orchestrator.build.fmi_binary import build_tag, install_binary
+from orchestrator.build.documentation import document_fmu
 
 __all__ = [
     "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "entry_script", "private_package_name",
     "write_ssp_archive",
 ]
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
+REPO_ROOT = Path(__file__).resolve().parents[2]
 COMPONENTS = REPO_ROOT / "components"
 
 
@@ -43,7 +43,7 @@ _IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc", "fmu_*.py.bak")
 def private_package_name(name, tag):
     """Return the package name under which the FMU ``name`` carries its cores.
 
-    ``tag`` identifies the build's code (:func:`orchestrator.fmi_binary.build_tag`): two builds
+    ``tag`` identifies the build's code (:func:`orchestrator.build.fmi_binary.build_tag`): two builds
     of one model with different code never share a module in a host's ``sys.modules``.
     """
     return f"_sonotrack_{name.lower()}_{tag}"

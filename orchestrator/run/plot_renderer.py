@@ -10,7 +10,7 @@ competes with the stepping. Once ``summary.json`` is on disk, :meth:`PlotRendere
 sends it the results file; it reads the file once, forks (where the platform can) so that a
 copy of its warmed-up self draws half of the figures (:data:`FIGURE_SHARES`) on the other
 core while it draws the rest, and answers when every PNG is written (each atomically, as
-:func:`orchestrator.plots.plot_run` does in-process). The command returns only then.
+:func:`orchestrator.run.plots.plot_run` does in-process). The command returns only then.
 
 A share that fails, a renderer that exits early or does not answer in
 :data:`RENDER_TIMEOUT_S` makes :meth:`~PlotRenderer.render` raise :class:`PlotError` with one
@@ -34,13 +34,13 @@ from components.common.errors import SonotrackError
 
 __all__ = ["FIGURE_SHARES", "PlotError", "PlotRenderer", "RENDER_TIMEOUT_S"]
 
-# The figures of orchestrator.plots.PLOT_FILES in two shares of about equal drawing time
+# The figures of orchestrator.run.plots.PLOT_FILES in two shares of about equal drawing time
 # (measured: trajectories + wheel speeds vs gains + localizer, each about half).
 FIGURE_SHARES = (("trajectories.png", "wheel_speeds.png"), ("gains.png", "localizer.png"))
 # Generous: a default run's figures take about 0.5 s; a loaded machine is 10x slower.
 RENDER_TIMEOUT_S = 120.0
 # The source tree the parent imports orchestrator from: the renderers import the same code.
-_SOURCE_ROOT = str(Path(__file__).resolve().parent.parent)
+_SOURCE_ROOT = str(Path(__file__).resolve().parents[2])
 
 
 class PlotError(SonotrackError):
@@ -82,7 +82,7 @@ class PlotRenderer:
         self._log = tempfile.TemporaryFile()   # its stderr: never a pipe that could fill up
         # the same source tree as ours first on its path, whatever the working folder holds
         code = (f"import sys; sys.path.insert(0, {_SOURCE_ROOT!r}); "
-                f"from orchestrator.plot_renderer import _serve; sys.exit(_serve({os.getpid()}))")
+                f"from orchestrator.run.plot_renderer import _serve; sys.exit(_serve({os.getpid()}))")
         self._process = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
                                          stdout=subprocess.PIPE, stderr=self._log)
 
@@ -172,7 +172,7 @@ def _warm_up():
     """Import what drawing needs and draw one small figure (fonts, Agg, PNG encoding)."""
     import io
 
-    from orchestrator.plots import _Figures
+    from orchestrator.run.plots import _Figures
 
     figures = _Figures()
     fig, ax = figures.subplots(figsize=(2, 2))
@@ -185,7 +185,7 @@ def _warm_up():
 
 def _draw(data, out_dir, figures):
     """(written paths, error text or None) of one share of the figures."""
-    from orchestrator.plots import plot_run
+    from orchestrator.run.plots import plot_run
 
     try:
         return [str(p) for p in plot_run(data, out_dir, figures=figures)], None
@@ -237,7 +237,7 @@ def _serve(parent_pid):
     _die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C stops the run; the run stops us
     _warm_up()
-    from orchestrator.results import read_results
+    from orchestrator.run.results import read_results
 
     times["ready"] = time.time()
     line = sys.stdin.readline()

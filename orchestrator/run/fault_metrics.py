@@ -71,7 +71,7 @@ def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
     -------
     dict
     """
-    from orchestrator.results import DEFAULT_CHUNK_ROWS, iter_result_chunks, read_header
+    from orchestrator.run.results import DEFAULT_CHUNK_ROWS, iter_result_chunks, read_header
 
     header = read_header(path)
     columns = [c for c in fault_columns(faults) if c in header]
@@ -189,7 +189,7 @@ def survival(data, scenario):
     Parameters
     ----------
     data : dict of str to numpy.ndarray
-        The run's columns (``orchestrator.results.read_results``).
+        The run's columns (``orchestrator.run.results.read_results``).
     scenario : Scenario
         The run's scenario (its faults, and the planner's ``v_max`` and ``stop_distance``).
 

@@ -1,7 +1,7 @@
 """The figures in a run's summary, kept from the rows as the recorder writes them.
 
-The summary's tracking figures (:func:`orchestrator.metrics.tracking_summary`) and its
-robustness section (:func:`orchestrator.fault_metrics.fault_summary`) read about fifteen of
+The summary's tracking figures (:func:`orchestrator.run.metrics.tracking_summary`) and its
+robustness section (:func:`orchestrator.run.fault_metrics.fault_summary`) read about fifteen of
 the recorded columns. Re-reading them from ``results.csv`` after the run parses the file
 three times; a :class:`RowTrace` instead copies those columns of each row into a
 preallocated array as the row is recorded (one C-level copy of a tuple per row), and
@@ -19,8 +19,8 @@ import operator
 
 import numpy as np
 
-from orchestrator.fault_metrics import fault_columns, fault_summary
-from orchestrator.metrics import tracking_summary, tracking_summary_from_csv
+from orchestrator.run.fault_metrics import fault_columns, fault_summary
+from orchestrator.run.metrics import tracking_summary, tracking_summary_from_csv
 
 __all__ = ["MAX_TRACE_ROWS", "TRACE_COLUMNS", "RowTrace", "summary_figures",
            "summary_figures_from_csv"]
@@ -93,7 +93,7 @@ def summary_figures(trace, faults, stop_distance):
 def summary_figures_from_csv(path, faults, stop_distance):
     """The tracking figures and the ``robustness`` section read back from ``results.csv``
     in bounded chunks (the reference :func:`summary_figures` is checked against)."""
-    from orchestrator.fault_metrics import fault_summary_from_csv
+    from orchestrator.run.fault_metrics import fault_summary_from_csv
 
     figures = tracking_summary_from_csv(path, stop_distance)
     figures["robustness"] = fault_summary_from_csv(path, faults, stop_distance)

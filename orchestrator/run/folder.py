@@ -133,7 +133,7 @@ class RunFolder:
         plots); an older run's copies are removed when this run starts.
     fsync : bool
         fsync each summary and the folder after writing it (survives a power cut, not only a
-        kill); a sweep's runs leave it off (see :func:`orchestrator.run.run_scenario`).
+        kill); a sweep's runs leave it off (see :func:`orchestrator.run.runner.run_scenario`).
     """
 
     def __init__(self, path, own_files=(), fsync=True):

@@ -1,7 +1,7 @@
 """Run a slave class in-process, without FMI, behind the same interface as an FMU instance.
 
 :class:`SlaveInstance` instantiates the pythonfmu slave class of an FMU directly from
-``components/`` and offers :class:`orchestrator.fmu.FmuInstance`'s interface, so the master
+``components/`` and offers :class:`orchestrator.fmu.handle.FmuInstance`'s interface, so the master
 can step the same model code with and without the FMI layer. Used to measure what FMI costs.
 """
 

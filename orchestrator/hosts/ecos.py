@@ -1,7 +1,7 @@
 """ecos as a third host: run FMUs and .ssd files in the C++ engine of the ``ecospy`` wheel.
 
 Used by the tests (tests/integration/test_portable_ssd.py) and benchmarks/ssd_hosts.py, as
-:mod:`orchestrator.crosscheck` is for libcosim.
+:mod:`orchestrator.hosts.libcosim` is for libcosim.
 
 ecos is a non-Python host: its command line ``ecos simulate`` loads the FMUs' shared libraries
 itself and writes every variable of every instance to a CSV file (values printed by

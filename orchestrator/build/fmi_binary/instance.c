@@ -13,11 +13,11 @@
 #include "sonotrack_fmi2.h"
 
 #ifndef SONOTRACK_SOURCE_SHA256
-#error "define SONOTRACK_SOURCE_SHA256 as the quoted orchestrator.fmi_binary.source_hash() (make does)"
+#error "define SONOTRACK_SOURCE_SHA256 as the quoted orchestrator.build.fmi_binary.source_hash() (make does)"
 #endif
 
 /* Which sources this library was compiled from: `sonotrack build` reads the string from the file
- * and refuses a library whose sources have changed since (orchestrator.fmi_binary). */
+ * and refuses a library whose sources have changed since (orchestrator.build.fmi_binary). */
 __attribute__((used)) static const char SOURCE_ID[] =
     "sonotrack-fmi2-sources sha256 " SONOTRACK_SOURCE_SHA256;
 

@@ -1,7 +1,7 @@
 /* sonotrack's FMI 2.0 Co-Simulation binary (linux64): what its source files share (private).
  *
  * One shared library serves every sonotrack FMU: what differs per FMU is read at fmi2Instantiate
- * from resources/sonotrack_binding.txt, written by `sonotrack build` (orchestrator/fmi_binary):
+ * from resources/sonotrack_binding.txt, written by `sonotrack build` (orchestrator/build/fmi_binary):
  * the GUID, the private package and entry module of the slave, the build-time libpython and
  * Python executable, and one line per variable (value reference, type, causality, variability).
  *

@@ -27,7 +27,7 @@ def plot_fault_run(data, scenario, path, dpi=80):
     """
     from matplotlib.patches import Rectangle
 
-    from orchestrator.matplotlib_agg import pyplot
+    from orchestrator.report.matplotlib_agg import pyplot
 
     plt = pyplot()
     t = data["time"]

@@ -61,7 +61,7 @@ def instance_parameters(system, scenario):
         raise ConfigError(f"{where}: " + "; ".join(problems))
     faults = getattr(scenario, "faults", ())
     if faults:
-        from orchestrator.faults import SCHEDULE_PARAMETER, fault_parameters
+        from orchestrator.scenario.faults import SCHEDULE_PARAMETER, fault_parameters
 
         for instance, text in fault_parameters(system, faults, where).items():
             if f"{instance}.{SCHEDULE_PARAMETER}" in scenario.parameters:
@@ -91,7 +91,7 @@ def _rates(system, scenario):
 
 # Recorded whatever the scenario lists: the summary's figures are computed from them.
 _SUMMARY_COLUMNS = ("source.x", "source.y", "plant.x", "plant.y", "plant.heading",
-                    # the robustness section (orchestrator/fault_metrics.py)
+                    # the robustness section (orchestrator/run/fault_metrics.py)
                     "plant.speed", "plant.slip_left", "plant.slip_right",
                     "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
                     "localizer.faults_active", "source.faults_active", "plant.faults_active")
@@ -126,7 +126,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
     The results folder is checked before anything runs; an older run's files in it are
     cleared and ``summary.json`` says ``"running"`` before the first FMU is instantiated
-    (see :mod:`orchestrator.outputs`). The summary says ``"ok"`` only once the last step is
+    (see :mod:`orchestrator.run.folder`). The summary says ``"ok"`` only once the last step is
     done and ``results.csv`` is complete; a failure or a signal is written into it as soon as
     it is known (``"failed"`` or ``"interrupted"`` with ``error``), and a run that is killed
     leaves ``"running"``. SIGINT and SIGTERM stop the run after the step in progress.
@@ -143,7 +143,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         Where the FMUs are, if not beside the ``.ssd``.
     plots : bool
         Write the PNG plots. Renderer processes get ready while the run steps and draw
-        once the summary is on disk (:mod:`orchestrator.plot_renderer`); the call returns
+        once the summary is on disk (:mod:`orchestrator.run.plot_renderer`); the call returns
         when the PNGs are written. If they cannot be, the run's results stand: the summary's
         ``plots_error`` and :attr:`RunResult.plots_error` say why (one line).
     algorithm : {"gauss-seidel", "jacobi"}, optional
@@ -162,7 +162,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     handles : callable, optional
         ``handles(instance_name, fmu_path)`` returns the FMU handle of an instance for the
         ``"fmi"`` backend (a sweep worker passes warm, reusable ones); default a new
-        :class:`~orchestrator.fmu.FmuInstance` each.
+        :class:`~orchestrator.fmu.handle.FmuInstance` each.
     sync_summary : bool
         fsync ``summary.json`` (and its folder) at each write, so it survives a power cut. A
         sweep's worker passes False (four fsyncs, most of a warm run's overhead):
@@ -170,7 +170,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         again any run whose summary is missing or unreadable.
     allow_outside : bool
         Let the scenario and system files name files outside their own folders (waypoint
-        CSVs, ``.ssv`` parameter files; see :mod:`orchestrator.paths`).
+        CSVs, ``.ssv`` parameter files; see :mod:`orchestrator.files.paths`).
 
     Returns
     -------
@@ -185,8 +185,8 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     RunInterrupted
         If SIGINT or SIGTERM stopped the run (the summary says ``"interrupted"``).
     """
-    from orchestrator.outputs import RunFolder
-    from orchestrator.plots import PLOT_FILES
+    from orchestrator.run.folder import RunFolder
+    from orchestrator.run.plots import PLOT_FILES
     from orchestrator.scenario import load_scenario
     from orchestrator.system import load_system
 
@@ -204,7 +204,7 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     folder.check()
     renderer = None
     if plots:
-        from orchestrator.plot_renderer import PlotRenderer
+        from orchestrator.run.plot_renderer import PlotRenderer
 
         renderer = PlotRenderer()   # imports matplotlib on another core while we step
     try:
@@ -218,16 +218,16 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 def _run(scenario, system, parameters, rates, columns, order, backend, handles, algorithm,
          record_interval, fsync, folder, progress, renderer):
     """run_scenario once its inputs are checked and its folder is ready."""
-    from orchestrator.fmu import FmuInstance
-    from orchestrator.master import InstanceSpec, Link, Master
-    from orchestrator.run_metrics import TRACE_COLUMNS, RowTrace
-    from orchestrator.stopping import StopSignals
+    from orchestrator.fmu.handle import FmuInstance
+    from orchestrator.run.master import InstanceSpec, Link, Master
+    from orchestrator.run.summary import TRACE_COLUMNS, RowTrace
+    from orchestrator.run.signals import StopSignals
 
     if backend == "fmi":
         make = handles or FmuInstance
         instances = {name: make(system.component(name).fmu_path, name) for name in order}
     else:
-        from orchestrator.inprocess import SlaveInstance
+        from orchestrator.fmu.inprocess import SlaveInstance
 
         instances = {name: SlaveInstance(system.component(name).model_description.modelName,
                                          name) for name in order}
@@ -320,7 +320,7 @@ def _run(scenario, system, parameters, rates, columns, order, backend, handles, 
     if error is None:
         summary.pop("error", None)
     if recorder is not None and recorder.rows > 1 and all(c in columns for c in TRACE_COLUMNS):
-        from orchestrator.run_metrics import summary_figures, summary_figures_from_csv
+        from orchestrator.run.summary import summary_figures, summary_figures_from_csv
 
         stop_distance = float(parameters.get("planner", {}).get(
             "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
@@ -339,7 +339,7 @@ def _run(scenario, system, parameters, rates, columns, order, backend, handles, 
     folder.write_summary(summary)
     written, plots_error = [], None
     if drawing:
-        from orchestrator.plot_renderer import PlotError
+        from orchestrator.run.plot_renderer import PlotError
 
         try:
             written = renderer.render(folder.results_csv, folder.path, _PLOT_ROWS)
@@ -386,7 +386,7 @@ class _Stop(Exception):
 
 
 def _open_recorder(path, columns, fsync):
-    from orchestrator.recorder import Recorder
+    from orchestrator.run.recorder import Recorder
 
     return Recorder(path, columns, fsync=fsync)
 

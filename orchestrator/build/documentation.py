@@ -20,13 +20,13 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from components.common.errors import BuildError
-from orchestrator.html_report import Column, HtmlReport
+from orchestrator.report.html import Column, HtmlReport
 
 __all__ = ["DOCUMENTATION_FILE", "project_metadata", "add_metadata", "documentation_page",
            "document_fmu", "documentation_problems"]
 
 DOCUMENTATION_FILE = "documentation/index.html"
-_REPO_ROOT = Path(__file__).resolve().parent.parent
+_REPO_ROOT = Path(__file__).resolve().parents[2]
 _TYPES = ("Real", "Integer", "Boolean", "String", "Enumeration")
 
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from components.common.errors import ConfigError
-from orchestrator.metrics import distance_to_polyline
+from orchestrator.run.metrics import distance_to_polyline
 
 __all__ = ["REST_POSITION", "REST_HEADING", "REST_SETTLE", "RESAMPLE_SPACING", "path_length",
            "resample_path", "distance_to_path", "path_rmse", "tangent_arc_path",

@@ -29,7 +29,7 @@ class _Figures:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        from orchestrator.matplotlib_agg import ensure_bundled_fonts
+        from orchestrator.report.matplotlib_agg import ensure_bundled_fonts
 
         ensure_bundled_fonts()
         self._canvas = FigureCanvasAgg
@@ -146,7 +146,7 @@ def _true_fix(data):
 def _save(fig, path):
     import io
 
-    from orchestrator.outputs import atomic_write_bytes
+    from orchestrator.run.folder import atomic_write_bytes
 
     path.parent.mkdir(parents=True, exist_ok=True)
     encoded = io.BytesIO()

@@ -122,14 +122,14 @@ def tracking_summary_from_csv(path, stop_distance, chunk_rows=None):
     stop_distance : float
         The distance at which the planner is meant to stop, in m.
     chunk_rows : int, optional
-        Rows parsed at a time (default :data:`orchestrator.results.DEFAULT_CHUNK_ROWS`).
+        Rows parsed at a time (default :data:`orchestrator.run.results.DEFAULT_CHUNK_ROWS`).
 
     Returns
     -------
     dict
         As :func:`tracking_summary`; empty if the file holds no complete row.
     """
-    from orchestrator.results import DEFAULT_CHUNK_ROWS, iter_result_chunks
+    from orchestrator.run.results import DEFAULT_CHUNK_ROWS, iter_result_chunks
 
     chunk_rows = chunk_rows or DEFAULT_CHUNK_ROWS
 

@@ -41,7 +41,7 @@ class InstanceSpec:
     name : str
         Instance name.
     handle : object
-        An :class:`orchestrator.fmu.FmuInstance` (or any object with its interface:
+        An :class:`orchestrator.fmu.handle.FmuInstance` (or any object with its interface:
         ``variables``, ``instantiate``, ``port_group``, ``read``, ``write``, ``do_step``,
         ``terminate``, ``last_error``).
     rate : int

@@ -1,0 +1,31 @@
+"""One run: a scenario in, a run folder out (``results.csv``, ``summary.json``, plots).
+
+The pipeline, one concept per module, in the order a run passes through it:
+
+- :mod:`~orchestrator.run.runner`: :func:`run_scenario`, which loads the scenario and its
+  system, instantiates the FMUs and drives the rest;
+- :mod:`~orchestrator.run.master`: the co-simulation master (fixed base step, multi-rate,
+  Gauss-Seidel or Jacobi);
+- :mod:`~orchestrator.run.signals`: SIGINT / SIGTERM as a request to stop at the next step;
+- :mod:`~orchestrator.run.recorder`: outputs streamed to ``results.csv`` while the run goes;
+- :mod:`~orchestrator.run.folder`: the run folder, its status lifecycle and atomic writes;
+- :mod:`~orchestrator.run.results`: ``results.csv`` read back in bounded chunks;
+- :mod:`~orchestrator.run.metrics`, :mod:`~orchestrator.run.fault_metrics` and
+  :mod:`~orchestrator.run.summary`: the figures of ``summary.json``;
+- :mod:`~orchestrator.run.plots`, :mod:`~orchestrator.run.fault_plots` and
+  :mod:`~orchestrator.run.plot_renderer`: the PNG figures, drawn by a renderer process.
+
+Imports :mod:`orchestrator.fmu`, :mod:`orchestrator.system`, :mod:`orchestrator.scenario` and
+:mod:`orchestrator.report`; never sweep, verify, reproduce or the CLI.
+"""
+
+from .folder import (RESULTS_NAME, STATUSES, SUMMARY_NAME, RunFolder, atomic_write_bytes,
+                     atomic_write_json, atomic_write_text, read_summary)
+from .master import MASTER_ALGORITHMS, InstanceSpec, Link, Master
+from .results import count_rows, iter_result_chunks, read_header, read_results
+from .runner import BACKENDS, RunResult, instance_parameters, run_scenario
+
+__all__ = ["BACKENDS", "MASTER_ALGORITHMS", "RESULTS_NAME", "STATUSES", "SUMMARY_NAME",
+           "InstanceSpec", "Link", "Master", "RunFolder", "RunResult", "atomic_write_bytes",
+           "atomic_write_json", "atomic_write_text", "count_rows", "instance_parameters",
+           "iter_result_chunks", "read_header", "read_results", "read_summary", "run_scenario"]
