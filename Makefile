@@ -7,11 +7,11 @@ FMU_DIR := fmus
 SCENARIO ?= scenarios/s_curve.toml
 
 # sonotrack's FMI 2.0 binary (linux64), compiled against the FMI headers fmpy ships from every
-# C source and header in orchestrator/build/fmi_binary/ (a change to any of them rebuilds it). The
+# C source and header in orchestrator/builder/fmi_binary/ (a change to any of them rebuilds it). The
 # library carries the sha256 of those sources; `sonotrack build` refuses one built from others.
-FMI_BINARY := orchestrator/build/fmi_binary/linux64/sonotrack_fmi2.so
-FMI_SOURCES := $(wildcard orchestrator/build/fmi_binary/*.c)
-FMI_HEADERS := $(wildcard orchestrator/build/fmi_binary/*.h)
+FMI_BINARY := orchestrator/builder/fmi_binary/linux64/sonotrack_fmi2.so
+FMI_SOURCES := $(wildcard orchestrator/builder/fmi_binary/*.c)
+FMI_HEADERS := $(wildcard orchestrator/builder/fmi_binary/*.h)
 FMI_CC ?= gcc
 COMMA := ,
 FMI_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wformat=2 -Wconversion -Wsign-conversion \
@@ -26,7 +26,7 @@ fmi-binary: $(FMI_BINARY)
 # $(call FMI_COMPILE,<extra flags>,<output>): the sources' hash and fmpy's headers come from the
 # venv's Python.
 FMI_COMPILE = mkdir -p $(dir $(2)) && \
-	hash="$$($(BIN)/python -c 'from orchestrator.build.fmi_binary import source_hash; print(source_hash())')" && \
+	hash="$$($(BIN)/python -c 'from orchestrator.builder.fmi_binary import source_hash; print(source_hash())')" && \
 	headers="$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" && \
 	$(FMI_CC) -std=c11 -fPIC -shared $(FMI_WARNINGS) -fvisibility=hidden $(1) \
 		-DSONOTRACK_SOURCE_SHA256="\"$$hash\"" -I"$$headers" \
@@ -70,7 +70,7 @@ chromium:
 	else echo "chromium: not root or no apt-get; browser checks will skip"; fi
 
 # ecos (the C++ engine in the ecospy wheel) needs Debian's libtbb12 to start; the ecos tests
-# (tests/integration/test_portable_ssd.py) skip, saying why, where it cannot be installed.
+# (tests/integration/orchestrator/hosts/test_ecos.py) skip, saying why, where it cannot be installed.
 tbb:
 	@if /sbin/ldconfig -p 2>/dev/null | grep -q 'libtbb\.so\.12'; then :; \
 	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \

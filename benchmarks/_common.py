@@ -11,7 +11,7 @@ RESULTS = Path(__file__).resolve().parent / "results"
 
 def build_fresh(names):
     """Build the named FMUs from this checkout into a temporary folder; return {name: path}."""
-    from orchestrator.build.fmus import build_fmu
+    from orchestrator.builder.fmus import build_fmu
 
     out = Path(tempfile.mkdtemp(prefix="sonotrack_bench_"))
     return {name: build_fmu(name, out) for name in names}

@@ -11,7 +11,7 @@ Measured side by side in one run (alternating repetitions, medians reported):
   against our recorder writing every output to results.csv), and only the robot trajectory
   (libcosim's time-series observer on plant.x, plant.y against our recorder with those
   columns); also the largest difference of the robot trajectories (the cross-check of
-  tests/integration/test_cosim.py). The models' own compute time on that system (the slaves'
+  tests/integration/orchestrator/run/test_runner.py). The models' own compute time on that system (the slaves'
   ``do_step`` calls, timed in-process) splits each master's stepping time into model time
   and master overhead per instance step; that time plus our FMI calls, each at the cost of
   the cheapest one (``fmi2GetReal`` of one value), is a floor under our stepping time, and

@@ -44,8 +44,8 @@ TARGET_RATIO = 0.7
 
 def build_both(names, out):
     """Build ``names`` into out/ours and out/pythonfmu (same code, different linux64 binary)."""
-    from orchestrator.build.fmus import build_fmu
-    from orchestrator.build.fmi_binary import restore_pythonfmu_binary
+    from orchestrator.builder.fmus import build_fmu
+    from orchestrator.builder.fmi_binary import restore_pythonfmu_binary
 
     paths = {"ours": {}, "pythonfmu": {}}
     for name in names:
@@ -233,7 +233,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
 
     sys.path.insert(0, str(ROOT))
-    from tests.integration.fmu_checks import instantiate_free_cycles
+    from tests.support.fmu_checks import instantiate_free_cycles
 
     out = Path(tempfile.mkdtemp(prefix="sonotrack_fmi_cost_"))
     paths = build_both(NAMES, out)

@@ -96,7 +96,7 @@ def main(argv=None):
     parser.add_argument("--plots", help="folder for one PNG per fault scenario")
     parser.add_argument("names", nargs="*", help="scenario names (default: all)")
     args = parser.parse_args(argv)
-    from orchestrator.build.fmus import FMU_PACKAGES
+    from orchestrator.builder.fmus import FMU_PACKAGES
 
     paths = build_fresh(list(FMU_PACKAGES))
     fmu_dir = next(iter(paths.values())).parent

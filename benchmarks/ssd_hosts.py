@@ -26,7 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._common import build_fresh, write_result  # noqa: E402
-from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT, write_ssp_archive  # noqa: E402
+from orchestrator.builder.fmus import FMU_PACKAGES, REPO_ROOT, write_ssp_archive  # noqa: E402
 from orchestrator.ssp import read_ssd, write_ssd  # noqa: E402
 
 STOP = 1.0

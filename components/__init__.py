@@ -9,7 +9,7 @@ under a private package name and the FMU runs without this repository installed.
 __all__ = ["FMU_PACKAGES"]
 
 # FMU model name -> sub-package whose fmu.py holds the slave class of that name (here, not in
-# orchestrator.build.fmus, so that checking a scenario does not import the FMU builder).
+# orchestrator.builder.fmus, so that checking a scenario does not import the FMU builder).
 FMU_PACKAGES = {
     "RobotPlant": "plant",
     "SoundSource": "source",

@@ -2,5 +2,5 @@
 recording, sweeps, reports and the ``sonotrack`` command line.
 
 Sub-modules are imported lazily by the CLI; import what you need directly, e.g.
-``from orchestrator.build.fmus import build_all``.
+``from orchestrator.builder.fmus import build_all``.
 """

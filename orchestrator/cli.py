@@ -18,7 +18,7 @@ __all__ = ["console_main", "main"]
 
 
 def _cmd_build(args):
-    from orchestrator.build.fmus import FMU_PACKAGES, build_all
+    from orchestrator.builder.fmus import FMU_PACKAGES, build_all
 
     names = args.names or None
     for name in names or []:
@@ -34,7 +34,7 @@ def _cmd_build(args):
 
 
 def _write_ssp(out):
-    from orchestrator.build.fmus import REPO_ROOT, write_ssp_archive
+    from orchestrator.builder.fmus import REPO_ROOT, write_ssp_archive
 
     ssd = out / "SystemStructure.ssd"
     if not ssd.is_file():
@@ -43,7 +43,7 @@ def _write_ssp(out):
 
 
 def _cmd_validate(args):
-    from orchestrator.build.validation import validate_fmus
+    from orchestrator.builder.validation import validate_fmus
 
     paths = args.fmus or sorted(Path(args.dir).glob("*.fmu"))
     if not paths:

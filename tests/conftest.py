@@ -2,7 +2,7 @@
 
 import pytest
 
-from orchestrator.build.fmus import FMU_PACKAGES, REPO_ROOT, build_all
+from orchestrator.builder.fmus import FMU_PACKAGES, REPO_ROOT, build_all
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -1,6 +1,6 @@
 """ecos as a third host: run FMUs and .ssd files in the C++ engine of the ``ecospy`` wheel.
 
-Used by the tests (tests/integration/test_portable_ssd.py) and benchmarks/ssd_hosts.py, as
+Used by the tests (tests/integration/orchestrator/hosts/test_ecos.py) and benchmarks/ssd_hosts.py, as
 :mod:`orchestrator.hosts.libcosim` is for libcosim.
 
 ecos is a non-Python host: its command line ``ecos simulate`` loads the FMUs' shared libraries

@@ -7,7 +7,7 @@ three times; a :class:`RowTrace` instead copies those columns of each row into a
 preallocated array as the row is recorded (one C-level copy of a tuple per row), and
 :func:`summary_figures` computes the same figures from it. They are the same numbers: the
 CSV holds each float's shortest round-tripping text, so it parses back to the very values
-the trace kept (``tests/unit/test_run_metrics.py`` checks both ways agree).
+the trace kept (``tests/unit/orchestrator/run/test_summary.py`` checks both ways agree).
 
 Memory stays bounded: a run recording more than :data:`MAX_TRACE_ROWS` rows (400 simulated
 seconds at the default 20 ms) keeps no trace, and its figures are read back from the file in

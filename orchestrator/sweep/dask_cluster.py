@@ -2,7 +2,7 @@
 
 What ``sonotrack sweep --scheduler`` talks to on a cluster, made locally: one ``dask
 scheduler`` and ``workers`` single-threaded ``dask worker`` processes on 127.0.0.1, each its own
-process as on separate machines. The cluster test (``tests/integration/test_sweep.py``) and the
+process as on separate machines. The cluster test (``tests/integration/orchestrator/sweep/test_runs.py``) and the
 sweep benchmark (``benchmarks/sweep_scaling.py``) start theirs here.
 
 Examples

@@ -69,7 +69,7 @@ def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, f
     """
     import control
 
-    from orchestrator.build.fmus import build_fmu
+    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
 
     p = parameters or PlantParameters()
@@ -250,7 +250,7 @@ def controller_fmu_comparison(settings, modes=("fgs_pd", "pd", "pid"), samples=6
         Per mode: largest |voltage difference| [V], largest kp/kd difference, and how many
         samples had ``|e_n| > 1`` or ``|de_n| > 1`` (outside the fuzzy universe).
     """
-    from orchestrator.build.fmus import build_fmu
+    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
 
     inputs = _controller_inputs(settings, samples, seed)
@@ -319,7 +319,7 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
     """
     import control
 
-    from orchestrator.build.fmus import build_fmu
+    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
     from orchestrator.run.master import InstanceSpec, Link, Master
 

@@ -1,0 +1,117 @@
+"""A reduced reproduction study on freshly built FMUs, through the same code as the full one.
+
+Two runs per cell, stop times x0.25 and two speeds: the numbers mean little, but every cell,
+table, claim, figure and report file is produced by the code path of the full study.
+"""
+
+import json
+import re
+
+import pytest
+
+from orchestrator.report.html import embedded_image_sources
+from orchestrator.reproduce import reproduce
+from tests.support.html_render import ChromiumUnavailable, render_image_count
+
+pytestmark = pytest.mark.integration
+
+RTG = "rotate then go (without curvature)"
+
+FIGURES = {
+    "fig07_straight_curvature.png": ["source path", "curvature", RTG],
+    "fig08_scurve_curvature.png": ["source path", "curvature", RTG],
+    "fig13_static_tracking.png": ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"],
+    "fig14_static_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig15_dynamic_tracking.png": ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"],
+    "fig16_dynamic_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig17_static_dynamic_comparison.png": ["CPID", "CFGS-PD"],
+    "fig23_straight_tracking.png": ["source", "robot", "gap"],
+    "fig24_straight_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig25_straight_estimates.png": ["true", "heard"],
+    "fig26_straight_distance_angle.png": ["true", "heard"],
+    "fig27_scurve_tracking.png": ["source", "robot", "gap"],
+    "fig28_scurve_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig29_scurve_estimates.png": ["true", "heard"],
+    "fig30_scurve_distance_angle.png": ["true", "heard"],
+    "table1_3_speed_trends.png": [RTG, "curvature"],
+}
+
+
+def _strings(value):
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield str(k)
+            yield from _strings(v)
+    elif isinstance(value, list):
+        for v in value:
+            yield from _strings(v)
+    elif isinstance(value, str):
+        yield value
+
+
+@pytest.fixture(scope="module")
+def study(fmu_dir, tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce")
+    report = reproduce(out, fmu_dir=fmu_dir, workers=2, progress=False, runs=2,
+                       stop_time_scale=0.25, speeds=(0.4, 0.5))
+    return out, report
+
+
+def test_every_figure_is_written_with_its_series(study):
+    out, report = study
+    written = {f.path.split("/")[-1]: f for f in report.figures}
+    assert set(written) == set(FIGURES)
+    for name, series in FIGURES.items():
+        assert (out / "figures" / name).stat().st_size > 10_000, name
+        assert written[name].series == series, name
+        assert written[name].path == f"figures/{name}"
+
+
+def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
+    out, report = study
+    data = json.loads((out / "reproduction.json").read_text())
+    assert set(data["tables"]) == {"conditions", "table1", "table2", "table3", "table6",
+                                   "table7", "table8", "table9", "sec6_2"}
+    assert {c["verdict"] for c in data["claims"]} <= {"supported", "not supported",
+                                                       "inconclusive"}
+    assert all(c["requirement"][0] in "<>" for c in data["claims"])
+    # every printed number of Tables 1-3 (2 speeds), 6-7 and 8-9 (nominal friction, both
+    # feedforward settings; CPID, CFGS-PD with its integral trim and as pure PD) has a ratio row
+    per_table = {}
+    for row in data["paper_ratios"]:
+        per_table[row["table"]] = per_table.get(row["table"], 0) + 1
+    assert per_table == {"Table 1": 6, "Table 2": 8, "Table 3": 4, "Table 6": 8,
+                         "Table 7": 13, "Table 8": 36, "Table 9": 12}
+    # Table 6 from the simulated wheels: every row has a simulated mean beside the paper's
+    assert all(row["ratio"] is not None for row in data["paper_ratios"]
+               if row["table"] == "Table 6")
+    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 36
+    assert "integral trim" in data["configuration"]["pd_form"]
+    text = (out / "reproduction.md").read_text() + (out / "reproduction.json").read_text()
+    assert str(out) not in text and "/tmp" not in text
+    assert not [s for s in _strings(data) if s.startswith("/")]
+    markdown = (out / "reproduction.md").read_text()
+    assert "](figures/fig07_straight_curvature.png)" in markdown
+    assert markdown.index("Configuration and assumptions") < markdown.index("Claims")
+    assert "feedforward" in markdown.split("## Claims")[0]
+
+
+def test_html_report_shows_every_figure(study):
+    out, report = study
+    page = out / "reproduction.html"
+    sources = embedded_image_sources(page.read_text())
+    assert len(sources) == len(FIGURES)
+    assert all(s.startswith("data:image/png;base64,") for s in sources)
+    assert not re.search(r'(src|href)="(/|https?:)', page.read_text())
+    try:
+        loaded, total = render_image_count(page)
+    except ChromiumUnavailable as exc:
+        pytest.skip(f"images are embedded data (checked); no browser render: {exc}")
+    assert (loaded, total) == (len(FIGURES), len(FIGURES))
+
+
+def test_a_second_call_reuses_every_finished_run(study, fmu_dir):
+    out, _ = study
+    again = reproduce(out, fmu_dir=fmu_dir, workers=1, progress=False, runs=2,
+                      stop_time_scale=0.25, speeds=(0.4, 0.5), tables=("table1",))
+    assert again.settings["runs_computed"] == 0 and again.settings["runs_reused"] == 8
