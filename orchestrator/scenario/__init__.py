@@ -23,19 +23,23 @@ Seeds: the master passes ``seed`` to every instance that has a ``seed`` paramete
 Modules, one concept each:
 
 - :mod:`~orchestrator.scenario.schema`: :data:`SCHEMA`, the per-field checks, the step checks;
-- :mod:`~orchestrator.scenario.model`: the validated :class:`Scenario` and its input hash;
 - :mod:`~orchestrator.scenario.locations`: where the ``.ssd`` and file-valued parameters are;
 - :mod:`~orchestrator.scenario.system_checks`: instances, step ranges and parameter ranges
   against the ``.ssd`` and the FMUs' range tables;
-- :mod:`~orchestrator.scenario.loading`: :func:`scenario_from_dict` and :func:`load_scenario`.
+- :mod:`~orchestrator.scenario.faults`: the ``[[faults]]`` schedule;
+- :mod:`~orchestrator.scenario.validation`: all of these applied to a dict, every problem at
+  once;
+- :mod:`~orchestrator.scenario.model`: the validated :class:`Scenario`, built by
+  :func:`scenario_from_dict`, and its input hash;
+- :mod:`~orchestrator.scenario.loading`: :func:`load_scenario`, a TOML file read and validated.
 
 This ``__init__`` re-exports the public names, so ``from orchestrator.scenario import
 load_scenario`` is the stable import path.
 """
 
-from .loading import load_scenario, scenario_from_dict
+from .loading import load_scenario
 from .locations import default_system_path
-from .model import Scenario
+from .model import Scenario, scenario_from_dict
 from .schema import DEFAULT_MAX_STEPS, MASTERS, SCHEMA, STEP_TOLERANCE, Field, parse_seconds
 from .system_checks import model_ranges
 

@@ -1,8 +1,9 @@
 """The validated scenario as a value: :class:`Scenario`, its steps, its dict form and its hash.
 
-:func:`~orchestrator.scenario.scenario_from_dict` (and
-:func:`~orchestrator.scenario.load_scenario`) build it once the schema and the checks against its
-system have passed; :meth:`Scenario.input_hash` is what a sweep stores runs by.
+:func:`scenario_from_dict` (and :func:`~orchestrator.scenario.load_scenario`) build it once the
+schema and the checks against its system have passed (:mod:`orchestrator.scenario.validation`);
+:meth:`Scenario.to_dict` gives back the dict it reads; :meth:`Scenario.input_hash` is what a sweep
+stores runs by.
 """
 
 from __future__ import annotations
@@ -15,8 +16,9 @@ from pathlib import Path
 from orchestrator.scenario.faults import faults_to_dicts
 
 from .schema import DEFAULT_MAX_STEPS
+from .validation import check_scenario
 
-__all__ = ["Scenario"]
+__all__ = ["Scenario", "scenario_from_dict"]
 
 
 @dataclass(frozen=True)
@@ -119,8 +121,6 @@ class Scenario:
                 data[key] = {**data[key], **value}
             else:
                 data[key] = value
-        from .loading import scenario_from_dict   # loading builds Scenarios: import at call
-
         return scenario_from_dict(data, source=f"{self.source} with overrides")
 
     def input_hash(self, extra=None):
@@ -141,3 +141,33 @@ class Scenario:
         text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
+
+def scenario_from_dict(data, source="<dict>", base_dir=None, allow_outside=False):
+    """Validate a scenario given as a dict (as TOML would give it).
+
+    Parameters
+    ----------
+    data : dict
+        Fields of :data:`~orchestrator.scenario.SCHEMA`.
+    source : str
+        Name used in error messages (a file path, or ``"<dict>"``).
+    base_dir : str or pathlib.Path, optional
+        Directory that a relative ``system`` is resolved from, and whose ``../fmus`` holds the
+        default system; without it, the current directory and the repository's ``fmus/``.
+        File-valued parameters (``source.path = "waypoints.csv"``) resolve from it too and
+        must stay inside it (:mod:`orchestrator.files.paths`).
+    allow_outside : bool
+        Accept file-valued parameters that lead outside ``base_dir``.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ConfigError
+        Listing every problem, one per line (see
+        :func:`~orchestrator.scenario.validation.check_scenario`).
+    """
+    return Scenario(**check_scenario(data, source=source, base_dir=base_dir,
+                                     allow_outside=allow_outside))

@@ -3,8 +3,9 @@
 :data:`SCHEMA` is a table written as data (field -> :class:`Field`); :class:`FieldChecker`
 checks one value of each kind and collects every problem as one line naming the source, the
 field, the bad value and the valid choices. Nothing here reads a file or knows the system:
-:mod:`orchestrator.scenario.loading` applies the schema, :mod:`orchestrator.scenario.system_checks`
-checks the values against the ``.ssd`` and the FMUs' valid ranges.
+:mod:`orchestrator.scenario.validation` applies the schema,
+:mod:`orchestrator.scenario.system_checks` checks the values against the ``.ssd`` and the FMUs'
+valid ranges.
 """
 
 from __future__ import annotations

@@ -4,13 +4,13 @@ Both engines hand the same task function (:func:`orchestrator.sweep.worker.run_t
 Dask and report each result as it arrives, so the sweep writes one store and one table
 whichever runs it:
 
-- :class:`LocalEngine` (the default): Dask's local process scheduler
-  (:func:`dask.multiprocessing.get`) over a pool of worker processes that this engine keeps
-  for its whole life. The pool starts in milliseconds (its processes are forked from this
-  one once Dask is imported; the sweep starts them before it plans, and before its progress
-  bar starts a thread). Each worker first warms up on a few steps of the sweep's first
-  scenario, while the sweep's process plans and hashes the runs, then keeps FMUs loaded and
-  instances warm from one run, and one sweep, to the next.
+- :class:`LocalEngine` (the default): Dask's local scheduler (:func:`dask.local.get_async`,
+  the core of :func:`dask.multiprocessing.get`) over a pool of worker processes that this
+  engine keeps for its whole life. The pool starts in milliseconds (its processes are forked
+  from this one once Dask is imported; the sweep starts them before it plans, and before its
+  progress bar starts a thread). Each worker first warms up on a few steps of the sweep's
+  first scenario, while the sweep's process plans and hashes the runs, then keeps FMUs
+  loaded and instances warm from one run, and one sweep, to the next.
 - :class:`ClusterEngine`: a ``dask.distributed`` scheduler given by address (``dask
   scheduler`` / ``dask worker`` on any machines that see the same files) or an existing
   ``Client``; the workers keep their instances warm the same way.
@@ -62,23 +62,30 @@ def _pool_context():
     return multiprocessing.get_context("spawn")
 
 
-class _QueuedPool:
-    """The worker pool as Dask's local scheduler sees it: with ``slots`` task slots.
+def _queue_depth(workers, alone):
+    """Tasks to keep submitted to the pool: two per worker, or one to run a suspect alone.
 
-    :func:`dask.multiprocessing.get` keeps at most ``pool._max_workers`` tasks submitted, and
-    submits the next only after it has taken a result and run the callbacks (the sweep's table
-    write, with its fsyncs). With one task queued per worker beyond the one it runs, a worker
-    that finishes takes the next task at once instead of waiting for that round trip; workers
-    still take queued tasks in order as they become free, so the load stays balanced. (One
-    slot: one task at a time, to find which task kills its worker.)
+    :func:`dask.local.get_async` submits the next task only after it has taken a result and
+    run the callbacks (the sweep's table write, with its fsyncs). With one task queued per
+    worker beyond the one it runs, a worker that finishes takes the next task at once instead
+    of waiting for that round trip; workers still take queued tasks in order as they become
+    free, so the load stays balanced. (One slot: one task at a time, to find which task kills
+    its worker.)
     """
+    return 1 if alone else 2 * workers
 
-    def __init__(self, pool, slots):
-        self._pool = pool
-        self._max_workers = slots
 
-    def submit(self, function, *args, **kwargs):
-        return self._pool.submit(function, *args, **kwargs)
+def _kill_workers(pool):
+    """SIGKILL the worker processes of a :class:`~concurrent.futures.ProcessPoolExecutor`.
+
+    The one private access of this module: ``pool._processes``. Python 3.11 gives no public
+    way to reach or stop a pool's processes (``shutdown`` waits for the running tasks, and
+    ``cancel_futures`` cancels only queued ones); ``ProcessPoolExecutor.kill_workers()``
+    arrives in Python 3.14, which this project does not run on yet.
+    """
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        if process.is_alive():
+            process.kill()
 
 
 class LocalEngine:
@@ -145,9 +152,16 @@ class LocalEngine:
         worker died while it ran alone, twice, is reported as failed instead of being tried
         again; the tasks that merely shared the pool with it are computed.
         """
+        import pickle
         from concurrent.futures.process import BrokenProcessPool
+        from functools import partial
 
-        from dask.multiprocessing import get
+        import cloudpickle
+        from dask.local import get_async
+        from dask.multiprocessing import pack_exception, reraise
+
+        # what dask.multiprocessing.get passes get_async for a process pool
+        dumps = partial(cloudpickle.dumps, protocol=pickle.HIGHEST_PROTOCOL)
 
         remaining = dict(tasks)
         breaks = {key: 0 for key in remaining}
@@ -169,9 +183,10 @@ class LocalEngine:
             graph = {key: (function, task) for key, task in batch.items()}
             sent = set()
             try:
-                get(graph, list(graph),
-                    pool=_QueuedPool(self._pool, 1 if alone else 2 * self.workers),
-                    chunksize=1, callbacks=[(None, None, pretask, posttask, None)])
+                get_async(self._pool.submit, _queue_depth(self.workers, alone), graph,
+                          list(graph), dumps=dumps, loads=cloudpickle.loads,
+                          pack_exception=pack_exception, raise_exception=reraise,
+                          chunksize=1, callbacks=[(None, None, pretask, posttask, None)])
             except BrokenProcessPool:
                 self._drop_pool()
                 idle_breaks = idle_breaks + 1 if not sent else 0
@@ -205,9 +220,7 @@ class LocalEngine:
         pool, self._pool = self._pool, None
         if pool is None:
             return
-        for process in list(getattr(pool, "_processes", {}).values()):
-            if process.is_alive():
-                process.kill()
+        _kill_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
         self._remove_scratch()
 

@@ -1,11 +1,15 @@
-"""Sweep plans, ``--set`` / ``--seeds`` parsing and the sweep's files (no runs)."""
+"""Sweep plans, ``--set`` / ``--seeds`` parsing and the sweep's files (no runs, no FMUs)."""
 
 import json
+from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.sweep import expand_grid, parse_assignment, parse_seeds
+from orchestrator.scenario import scenario_from_dict
+from orchestrator.sweep import (expand_grid, parse_assignment, parse_seeds, plan_runs,
+                                plan_scenarios)
 from orchestrator.sweep.store import finished_summary, read_summary, write_table
 
 
@@ -58,6 +62,79 @@ def test_grid_is_the_full_product_times_seeds():
     assert len(runs) == 2 * 3 * 2
     assert ({"a.x": 2, "b.y": "q"}, 8) in runs
     assert expand_grid({}, seeds=[1]) == [({}, 1)]
+
+
+class _System:
+    """A loaded system as the planner reads it: instances, their parameters, files to hash.
+
+    Only the planner's ``v_cruise`` is a parameter, so that any other override is refused by
+    the parameter check (the scenario layer accepts every parameter of the range tables).
+    """
+
+    def __init__(self, folder):
+        ssd = Path(__file__).resolve().parents[4] / "fmus" / "SystemStructure.ssd"
+        self.description = SimpleNamespace(path=ssd)
+        self.parameter_values = {}
+        fmu = Path(folder) / "CurvaturePlanner.fmu"
+        fmu.write_bytes(b"not an FMU: only hashed")
+        v_cruise = SimpleNamespace(name="v_cruise", causality="parameter", type="Real",
+                                   start=0.3)
+        self.components = [SimpleNamespace(
+            name="planner", fmu_path=fmu,
+            model_description=SimpleNamespace(modelVariables=[v_cruise]))]
+
+    def component(self, name):
+        return next(c for c in self.components if c.name == name)
+
+
+def test_plan_runs_keys_each_combination_once_in_its_folder(tmp_path):
+    base = scenario_from_dict({"stop_time": 1.0})
+    runs = plan_runs(base, {"planner.v_cruise": [0.2, 0.4]}, tmp_path / "out", seeds=[1, 2],
+                     system=_System(tmp_path))
+    assert [r.settings for r in runs] == [{"planner.v_cruise": v, "seed": s}
+                                          for v in (0.2, 0.4) for s in (1, 2)]
+    assert [(r.scenario.parameters, r.scenario.seed) for r in runs] == [
+        ({"planner.v_cruise": v}, s) for v in (0.2, 0.4) for s in (1, 2)]
+    assert len({r.key for r in runs}) == 4
+    for run in runs:
+        assert len(run.key) == 16 and int(run.key, 16) >= 0
+        assert run.run_dir == (tmp_path / "out" / "runs" / run.key).resolve()
+        assert set(run.digests) == {"ssd", "fmu:planner"}
+
+
+def test_plan_runs_reports_every_refused_combination_at_once(tmp_path):
+    base = scenario_from_dict({"stop_time": 1.0})
+    with pytest.raises(ConfigError) as caught:
+        plan_runs(base, {"planner.v_cruise": [0.2, -1.0, 99.0]}, tmp_path / "out",
+                  system=_System(tmp_path))
+    lines = str(caught.value).splitlines()
+    assert lines[0] == "2 problems:"
+    assert "-1.0" in lines[1] and "99.0" in lines[2]
+    with pytest.raises(ConfigError, match=r"no parameter 'a_max'.*v_cruise"):
+        plan_runs(base, {"planner.a_max": [0.5]}, tmp_path / "out", system=_System(tmp_path))
+
+
+def test_plan_scenarios_keeps_the_first_of_equal_runs_and_reports_all_problems(tmp_path):
+    system = _System(tmp_path)
+    first = scenario_from_dict({"stop_time": 1.0, "seed": 3})
+    again = scenario_from_dict({"stop_time": 1.0, "seed": 3, "name": "same run"})
+    other = scenario_from_dict({"stop_time": 1.0, "seed": 4})
+    runs = plan_scenarios([first, again, other], tmp_path / "mc",
+                          systems={first.system: system})
+    assert [r.settings for r in runs] == [{"scenario": "scenario", "seed": 3},
+                                          {"scenario": "scenario", "seed": 4}]
+    assert runs[0].scenario is first
+    assert runs[0].run_dir.parent == (tmp_path / "mc" / "runs").resolve()
+    bad = [scenario_from_dict({"stop_time": 1.0, "parameters": {f"planner.{name}": value}})
+           for name, value in (("a_max", 0.5), ("mode", "curvature"))]
+    with pytest.raises(ConfigError) as caught:
+        plan_scenarios([first, *bad], tmp_path / "mc", settings=[{"i": 0}, {"i": 1}, {"i": 2}],
+                       systems={first.system: system})
+    message = str(caught.value)
+    assert message.startswith("2 problems:")
+    assert "no parameter 'a_max'" in message and "no parameter 'mode'" in message
+    with pytest.raises(ConfigError, match="2 settings for 3 scenarios"):
+        plan_scenarios([first, *bad], tmp_path / "mc", settings=[{}, {}])
 
 
 @pytest.mark.parametrize("content", [
