@@ -85,7 +85,7 @@ def summary_figures_cost(results_csv, repeats):
     recording (:class:`RowTrace`, what run_scenario does) against re-reading results.csv in
     chunks (what it did); and the cost of keeping the rows (one append per recorded row)."""
     from orchestrator.run.results import read_header, read_results
-    from orchestrator.run.summary import RowTrace, summary_figures, summary_figures_from_csv
+    from orchestrator.run.summary import ResultRows, RowTrace, summary_figures
 
     stop = json.loads((Path(results_csv).parent / "summary.json").read_text())["stop_distance_m"]
     columns = read_header(results_csv)[1:]
@@ -102,7 +102,7 @@ def summary_figures_cost(results_csv, repeats):
         ours = summary_figures(trace, (), stop)
         traced.append(time.perf_counter() - started)
         started = time.perf_counter()
-        reference = summary_figures_from_csv(results_csv, (), stop)
+        reference = summary_figures(ResultRows(results_csv), (), stop)
         reread.append(time.perf_counter() - started)
     return {"rows": len(rows), "from_kept_rows_s": median(traced),
             "from_csv_reread_s": median(reread), "keeping_the_rows_s": median(appends),

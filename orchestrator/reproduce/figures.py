@@ -9,7 +9,7 @@ each other, a panel shows their paired difference instead. :func:`write_figures`
 
 import numpy as np
 
-from orchestrator.reproduce.geometry import distance_to_path
+from orchestrator.reproduce.geometry import distance_to_polyline
 from orchestrator.report.matplotlib_agg import pyplot
 
 from .analysis import CASE_TARGETS, reference_path
@@ -30,7 +30,7 @@ def _axes_xy(ax, title):
 
 
 def _deviation(reference):
-    return lambda run: distance_to_path(run.xy(), reference)
+    return lambda run: distance_to_polyline(run.xy(), reference)
 
 
 def _sec62_compare(study, out, path, number):

@@ -12,10 +12,10 @@ import math
 import numpy as np
 
 from components.common.errors import ConfigError
-from orchestrator.run.metrics import distance_to_polyline
+from orchestrator.run.metrics import distance_to_polyline  # the one polyline distance
 
 __all__ = ["REST_POSITION", "REST_HEADING", "REST_SETTLE", "RESAMPLE_SPACING", "path_length",
-           "resample_path", "distance_to_path", "path_rmse", "tangent_arc_path",
+           "resample_path", "distance_to_polyline", "path_rmse", "tangent_arc_path",
            "circle_fit_radius", "arrival_time", "apex_offsets"]
 
 # "Arrived": the true pose stays within 5 mm and 0.01 rad (0.6 deg) of the final pose for at
@@ -54,32 +54,6 @@ def resample_path(xy, spacing):
     return np.column_stack([np.interp(s, cumulative, xy[:, 0]), np.interp(s, cumulative, xy[:, 1])])
 
 
-def distance_to_path(points, polyline, chunk=256):
-    """Shortest distance [m] from each point to a polyline (a single point is allowed).
-
-    Works in chunks of points so that a long trajectory against a finely sampled reference
-    does not build an ``n x m`` array of gigabytes.
-    """
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
-    polyline = np.asarray(polyline, dtype=float).reshape(-1, 2)
-    if len(polyline) == 1 or len(points) == 0:
-        return distance_to_polyline(points, polyline) if len(points) else np.zeros(0)
-    # the projection on every segment, coordinate by coordinate on 2-D (points x segments)
-    # arrays: several times faster than norms over a 3-D array
-    ax, ay = polyline[:-1, 0], polyline[:-1, 1]
-    dx, dy = np.diff(polyline[:, 0]), np.diff(polyline[:, 1])
-    length2 = dx * dx + dy * dy
-    length2 = np.where(length2 > 0, length2, 1.0)
-    parts = []
-    for i in range(0, len(points), chunk):
-        rx = points[i:i + chunk, 0, None] - ax
-        ry = points[i:i + chunk, 1, None] - ay
-        along = np.clip((rx * dx + ry * dy) / length2, 0.0, 1.0)
-        ex, ey = rx - along * dx, ry - along * dy
-        parts.append(np.sqrt(np.min(ex * ex + ey * ey, axis=1)))
-    return np.concatenate(parts)
-
-
 def path_rmse(xy, reference, spacing=RESAMPLE_SPACING):
     """RMS distance [m] of a path from a reference polyline, sampled by arc length.
 
@@ -93,7 +67,7 @@ def path_rmse(xy, reference, spacing=RESAMPLE_SPACING):
         Arc-length spacing [m] of the samples of ``xy``.
     """
     samples = resample_path(xy, spacing)
-    return float(np.sqrt(np.mean(distance_to_path(samples, reference) ** 2)))
+    return float(np.sqrt(np.mean(distance_to_polyline(samples, reference) ** 2)))
 
 
 def tangent_arc_path(start, heading, targets, points_per_arc=4001):

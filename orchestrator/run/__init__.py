@@ -4,14 +4,20 @@ The pipeline, one concept per module, in the order a run passes through it:
 
 - :mod:`~orchestrator.run.runner`: :func:`run_scenario`, which loads the scenario and its
   system, instantiates the FMUs and drives the rest;
+- :mod:`~orchestrator.run.plan`: the :class:`RunPlan`, what a run needs, checked and
+  resolved once before t0;
+- :mod:`~orchestrator.run.parameters`: :func:`instance_parameters`, the parameter values per
+  instance (``.ssd`` bindings, scenario overrides, fault schedules, seed);
 - :mod:`~orchestrator.run.master`: the co-simulation master (fixed base step, multi-rate,
   Gauss-Seidel or Jacobi);
 - :mod:`~orchestrator.run.signals`: SIGINT / SIGTERM as a request to stop at the next step;
 - :mod:`~orchestrator.run.recorder`: outputs streamed to ``results.csv`` while the run goes;
 - :mod:`~orchestrator.run.folder`: the run folder, its status lifecycle and atomic writes;
 - :mod:`~orchestrator.run.results`: ``results.csv`` read back in bounded chunks;
-- :mod:`~orchestrator.run.metrics`, :mod:`~orchestrator.run.fault_metrics` and
-  :mod:`~orchestrator.run.summary`: the figures of ``summary.json``;
+- :mod:`~orchestrator.run.summary`: the figures of ``summary.json`` over a stream of row
+  chunks, from the rows kept while recording or from ``results.csv`` read back; the figures
+  themselves in :mod:`~orchestrator.run.metrics` (tracking, and the one point-to-polyline
+  distance) and :mod:`~orchestrator.run.fault_metrics` (robustness);
 - :mod:`~orchestrator.run.plots`, :mod:`~orchestrator.run.fault_plots` and
   :mod:`~orchestrator.run.plot_renderer`: the PNG figures, drawn by a renderer process.
 
@@ -23,9 +29,12 @@ from .folder import (RESULTS_NAME, STATUSES, SUMMARY_NAME, RunFolder, atomic_wri
                      atomic_write_json, atomic_write_text, read_summary)
 from .master import MASTER_ALGORITHMS, InstanceSpec, Link, Master
 from .results import count_rows, iter_result_chunks, read_header, read_results
-from .runner import BACKENDS, RunResult, instance_parameters, run_scenario
+from .parameters import instance_parameters
+from .plan import BACKENDS, RunPlan, plan_run
+from .runner import RunResult, run_scenario
 
 __all__ = ["BACKENDS", "MASTER_ALGORITHMS", "RESULTS_NAME", "STATUSES", "SUMMARY_NAME",
-           "InstanceSpec", "Link", "Master", "RunFolder", "RunResult", "atomic_write_bytes",
-           "atomic_write_json", "atomic_write_text", "count_rows", "instance_parameters",
-           "iter_result_chunks", "read_header", "read_results", "read_summary", "run_scenario"]
+           "InstanceSpec", "Link", "Master", "RunFolder", "RunPlan", "RunResult",
+           "atomic_write_bytes", "atomic_write_json", "atomic_write_text", "count_rows",
+           "instance_parameters", "iter_result_chunks", "plan_run", "read_header",
+           "read_results", "read_summary", "run_scenario"]

@@ -1,8 +1,10 @@
-"""What happened under faults: counts and extremes of a run, read from ``results.csv`` in chunks.
+"""What happened under faults: counts and extremes of a run, in one pass over its rows.
 
-:func:`fault_summary_from_csv` makes one pass over the recorded columns it needs (those that
-are missing are left out of the summary, never guessed) and keeps only running counts, so its
-memory does not grow with the run's length. The figures:
+:func:`fault_summary` reads the recorded columns it needs from a row source
+(:mod:`orchestrator.run.summary`: the rows kept while recording, or ``results.csv`` read back
+in chunks); columns that were not recorded are left out of the summary, never guessed. It
+keeps only running counts, so its memory does not grow with the run's length. The columns
+are named by the system description (:mod:`orchestrator.system.sonotrack`). The figures:
 
 - ``faults``: each scheduled fault (kind, target, start, end) with the seconds its target
   reported it active (``<target>.faults_active`` > 0, only if that column was recorded);
@@ -24,14 +26,18 @@ import math
 
 import numpy as np
 
-__all__ = ["fault_columns", "fault_summary", "fault_summary_from_csv", "survival", "SLIP_THRESHOLD", "STOPPED_SPEED",
-           "SPEED_MARGIN", "FINAL_TOLERANCE"]
+from orchestrator.run.metrics import source_distance
+from orchestrator.system.sonotrack import SONOTRACK
+
+__all__ = ["FINAL_TOLERANCE", "SLIP_THRESHOLD", "SPEED_MARGIN", "STOPPED_SPEED", "fault_columns",
+           "fault_summary", "survival"]
 
 # A tyre that slips more than this is past the peak of a typical rubber-on-floor curve
 # (about 0.1-0.2): traction falls and the wheel speed no longer measures the body's.
 SLIP_THRESHOLD = 0.2
 # Slower than this, the robot counts as stopped (the encoder quantum at 20 ms is 26 mm/s).
 STOPPED_SPEED = 0.03
+
 
 def _status_names():
     from components.acoustics.localizer import FixStatus
@@ -44,51 +50,33 @@ def _status_name(code, names):
 
 
 def fault_columns(faults=()):
-    """The recorded columns the fault figures read (``time`` first), for ``faults``."""
+    """The recorded columns the fault figures read (``time`` first), for ``faults``.
+
+    Parameters
+    ----------
+    faults : sequence of (str, Fault)
+        The scenario's ``faults`` (each target's ``faults_active`` column is read).
+
+    Returns
+    -------
+    list of str
+    """
     targets = sorted({target for target, _ in faults})
-    return (["time", "plant.speed", "plant.slip_left", "plant.slip_right",
-             "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
-             "planner.wheel_faults", "planner.odometry_faults",
-             "plant.x", "plant.y", "source.x", "source.y"]
-            + [f"{t}.faults_active" for t in targets])
+    return (["time", SONOTRACK.body_speed, *SONOTRACK.wheel_slips, SONOTRACK.fix_attempts,
+             SONOTRACK.fix_status, SONOTRACK.rejected_fixes, SONOTRACK.wheel_check_stops,
+             SONOTRACK.odometry_check_stops, *SONOTRACK.position_columns]
+            + [SONOTRACK.faults_active(t) for t in targets])
 
 
-def fault_summary_from_csv(path, faults=(), stop_distance=0.5, chunk_rows=None):
-    """Fault figures of a run (see the module docstring), read from its ``results.csv``.
-
-    Parameters
-    ----------
-    path : path-like
-        The run's ``results.csv``.
-    faults : sequence of (str, Fault)
-        The scenario's ``faults``.
-    stop_distance : float
-        The planner's stop distance [m].
-    chunk_rows : int, optional
-        Rows parsed at a time.
-
-    Returns
-    -------
-    dict
-    """
-    from orchestrator.run.results import DEFAULT_CHUNK_ROWS, iter_result_chunks, read_header
-
-    header = read_header(path)
-    columns = [c for c in fault_columns(faults) if c in header]
-    chunks = iter_result_chunks(path, columns, chunk_rows or DEFAULT_CHUNK_ROWS)
-    return fault_summary(chunks, header, faults, stop_distance)
-
-
-def fault_summary(chunks, recorded, faults=(), stop_distance=0.5):
-    """Fault figures of a run from its rows in successive blocks (one pass, running counts).
+def fault_summary(rows, faults=(), stop_distance=0.5):
+    """Fault figures of a run (see the module docstring), in one pass with running counts.
 
     Parameters
     ----------
-    chunks : iterable of dict of str to numpy.ndarray
-        Successive blocks of rows, each holding every column of :func:`fault_columns` that
-        is in ``recorded``.
-    recorded : collection of str
-        The columns the run recorded.
+    rows : row source
+        The run's rows (:class:`~orchestrator.run.summary.RowTrace` or
+        :class:`~orchestrator.run.summary.ResultRows`); of :func:`fault_columns` it reads
+        those the run recorded.
     faults : sequence of (str, Fault)
         The scenario's ``faults``.
     stop_distance : float
@@ -98,33 +86,36 @@ def fault_summary(chunks, recorded, faults=(), stop_distance=0.5):
     -------
     dict
     """
-    header = set(recorded)
+    header = set(rows.names)
     targets = sorted({target for target, _ in faults})
     wanted = fault_columns(faults)
-    have = {c for c in wanted if c in header}
+    present = [c for c in wanted if c in header]
+    have = set(present)
     missing = [c for c in wanted if c not in header]
+    speed_column, slip_columns = SONOTRACK.body_speed, SONOTRACK.wheel_slips
+    attempts_column, status_column = SONOTRACK.fix_attempts, SONOTRACK.fix_status
 
     names = _status_names()
     invalid, last_attempts, previous_time = {}, None, None
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
     active_time = {t: 0.0 for t in targets}
     rejected = min_distance = last_speed = wheel_stops = odometry_stops = None
-    for chunk in chunks:
+    for chunk in rows.chunks(present):
         time = chunk["time"]
         # each row stands for the interval since the previous row
         dt = np.diff(time, prepend=time[0] if previous_time is None else previous_time)
         previous_time = time[-1]
-        if "plant.speed" in have:
-            speed = np.abs(chunk["plant.speed"])
+        if speed_column in have:
+            speed = np.abs(chunk[speed_column])
             max_speed = max(max_speed, float(speed.max()))
             last_speed = float(speed[-1])
-        if {"plant.slip_left", "plant.slip_right"} <= have:
-            slip = np.maximum(np.abs(chunk["plant.slip_left"]), np.abs(chunk["plant.slip_right"]))
+        if set(slip_columns) <= have:
+            slip = np.maximum(np.abs(chunk[slip_columns[0]]), np.abs(chunk[slip_columns[1]]))
             max_slip = max(max_slip, float(slip.max()))
             slip_time += float(dt[slip > SLIP_THRESHOLD].sum())
-        if {"localizer.fix_attempts", "localizer.fix_status"} <= have:
-            attempts = chunk["localizer.fix_attempts"].astype(np.int64)
-            status = chunk["localizer.fix_status"].astype(np.int64)
+        if {attempts_column, status_column} <= have:
+            attempts = chunk[attempts_column].astype(np.int64)
+            status = chunk[status_column].astype(np.int64)
             rise = np.diff(attempts, prepend=attempts[0] if last_attempts is None
                            else last_attempts)
             if last_attempts is None and attempts[0] > 0:
@@ -136,20 +127,18 @@ def fault_summary(chunks, recorded, faults=(), stop_distance=0.5):
                     invalid[name] = invalid.get(name, 0) + 1
                 if rise[row] > 1:
                     invalid["unrecorded"] = invalid.get("unrecorded", 0) + int(rise[row]) - 1
-        if "planner.rejected_fixes" in have:
-            rejected = int(chunk["planner.rejected_fixes"][-1])
-        if "planner.wheel_faults" in have:
-            wheel_stops = int(chunk["planner.wheel_faults"][-1])
-        if "planner.odometry_faults" in have:
-            odometry_stops = int(chunk["planner.odometry_faults"][-1])
+        if SONOTRACK.rejected_fixes in have:
+            rejected = int(chunk[SONOTRACK.rejected_fixes][-1])
+        if SONOTRACK.wheel_check_stops in have:
+            wheel_stops = int(chunk[SONOTRACK.wheel_check_stops][-1])
+        if SONOTRACK.odometry_check_stops in have:
+            odometry_stops = int(chunk[SONOTRACK.odometry_check_stops][-1])
         for target in targets:
-            column = f"{target}.faults_active"
+            column = SONOTRACK.faults_active(target)
             if column in have:
                 active_time[target] += float(dt[chunk[column] > 0].sum())
-        if {"plant.x", "plant.y", "source.x", "source.y"} <= have:
-            distance = np.hypot(chunk["plant.x"] - chunk["source.x"],
-                                chunk["plant.y"] - chunk["source.y"])
-            low = float(distance.min())
+        if set(SONOTRACK.position_columns) <= have:
+            low = float(source_distance(chunk).min())
             min_distance = low if min_distance is None else min(min_distance, low)
 
     summary = {
@@ -158,7 +147,7 @@ def fault_summary(chunks, recorded, faults=(), stop_distance=0.5):
                     **({"channel": fault.channel} if fault.channel else {}),
                     "magnitude": fault.magnitude} for target, fault in faults],
         "faults_active_s": {t: active_time[t] for t in targets
-                            if f"{t}.faults_active" in have},
+                            if SONOTRACK.faults_active(t) in have},
         "invalid_fixes": dict(sorted(invalid.items())),
         "invalid_fixes_total": int(sum(invalid.values())),
         "fixes_rejected_by_gate": rejected,
@@ -202,10 +191,10 @@ def survival(data, scenario):
         stop_distance) or ``stopped`` (after a permanent fault without a region, final body
         speed below :data:`STOPPED_SPEED`).
     """
-    values = {name: float(scenario.parameters.get(f"planner.{name}", default))
+    values = {name: float(scenario.parameters.get(f"{SONOTRACK.planner}.{name}", default))
               for name, default in _PLANNER_DEFAULTS.items()}
-    speed = np.abs(data["plant.speed"])
-    distance = np.hypot(data["plant.x"] - data["source.x"], data["plant.y"] - data["source.y"])
+    speed = np.abs(data[SONOTRACK.body_speed])
+    distance = source_distance(data)
     checks = {
         "finite": bool(all(np.all(np.isfinite(column)) for column in data.values())),
         "speed": bool(speed.max() <= SPEED_MARGIN * values["v_max"]),

@@ -1,21 +1,29 @@
-"""Figures of merit of a tracking run, computed from recorded traces.
+"""Tracking figures of a run: how close the robot came to the source and how well it kept to
+the source's path.
 
-:func:`tracking_summary` takes whole arrays; :func:`tracking_summary_from_csv` computes the
-same figures (bit for bit) from a ``results.csv`` read in bounded chunks, so a run's memory
-does not grow with its simulated time.
+:func:`tracking_summary` reads a row source (:mod:`orchestrator.run.summary`: the rows kept
+while recording, or ``results.csv`` read back in chunks) in two passes: the first counts the
+rows and keeps the running minimum and the last distance, the second picks the thinned points
+the path deviation is measured on. Memory is bounded by a chunk and the thinned point counts
+(about 3,000 robot points and 500 path vertices, at most twice that), not by the run's length,
+and the figures do not depend on how the rows are chunked.
+
+:func:`distance_to_polyline` is the project's one point-to-polyline distance (the studies'
+path geometry, :mod:`orchestrator.reproduce.geometry`, uses it too).
 """
 
 import numpy as np
 
-__all__ = ["distance_to_polyline", "tracking_summary", "tracking_summary_from_csv"]
+from orchestrator.system.sonotrack import SONOTRACK
 
-# Points per block in distance_to_polyline: its temporaries are block x segments x 2 floats.
+__all__ = ["distance_to_polyline", "source_distance", "tracking_summary"]
+
+# Points per block in distance_to_polyline: its temporaries are block x segments floats.
 _POINT_BLOCK = 512
 # The reference path and the robot's positions are thinned to about these many vertices.
 _PATH_VERTICES = 500
 _ROBOT_POINTS = 3000
 _MOVED = 1e-3  # m from the start: the robot has started to move
-_TRACE_COLUMNS = ("plant.x", "plant.y", "source.x", "source.y")
 
 
 def distance_to_polyline(points, polyline):
@@ -23,18 +31,23 @@ def distance_to_polyline(points, polyline):
 
     Parameters
     ----------
-    points : (n, 2) array
-        Query points.
-    polyline : (m, 2) array
-        Vertices of the path, in order (m >= 1).
+    points : (n, 2) array_like
+        Query points (n may be 0).
+    polyline : (m, 2) array_like
+        Vertices of the path, in order (m >= 1; a single vertex is a point).
 
     Returns
     -------
-    (n,) array
+    (n,) numpy.ndarray
         Distance of each point to the nearest segment.
+
+    Examples
+    --------
+    >>> distance_to_polyline([[0.0, 1.5], [4.0, 6.0]], [[-1.0, 0.0], [1.0, 0.0], [1.0, 2.0]])
+    array([1., 5.])
     """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    polyline = np.asarray(polyline, dtype=float)
+    polyline = np.asarray(polyline, dtype=float).reshape(-1, 2)
     if len(polyline) == 1:
         return np.hypot(*(points - polyline[0]).T)
     ax, ay = polyline[:-1, 0], polyline[:-1, 1]
@@ -61,15 +74,31 @@ def distance_to_polyline(points, polyline):
     return result
 
 
-def tracking_summary(time, robot_xy, source_xy, stop_distance):
+def source_distance(chunk):
+    """Distance [m] from the robot to the source in each row of a chunk.
+
+    Parameters
+    ----------
+    chunk : dict of str to numpy.ndarray
+        Rows holding :attr:`~orchestrator.system.sonotrack.SonotrackSystem.position_columns`.
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    (robot_x, robot_y), (source_x, source_y) = SONOTRACK.robot_position, SONOTRACK.source_position
+    return np.hypot(chunk[robot_x] - chunk[source_x], chunk[robot_y] - chunk[source_y])
+
+
+def tracking_summary(rows, stop_distance):
     """Tracking figures of a run.
 
     Parameters
     ----------
-    time : (n,) array
-        Sample times in s.
-    robot_xy, source_xy : (n, 2) arrays
-        True robot and source positions at those times.
+    rows : row source
+        The run's rows (:class:`~orchestrator.run.summary.RowTrace` or
+        :class:`~orchestrator.run.summary.ResultRows`), holding the robot's and the
+        source's true positions.
     stop_distance : float
         The distance at which the planner is meant to stop, in m.
 
@@ -79,87 +108,39 @@ def tracking_summary(time, robot_xy, source_xy, stop_distance):
         ``final_distance_to_source_m``, ``final_position_error_m`` (|final distance -
         stop_distance|), ``min_distance_to_source_m`` and ``path_rmse_m``: the RMS distance of
         the robot's positions (once it has started to move) to the reference path, which runs
-        from the robot's start to the source's start and then along the source's path.
+        from the robot's start to the source's start and then along the source's path. Empty
+        if there are no rows.
     """
-    robot_xy = np.asarray(robot_xy, dtype=float)
-    source_xy = np.asarray(source_xy, dtype=float)
-    distance = np.hypot(*(robot_xy - source_xy).T)
-    moved = np.hypot(*(robot_xy - robot_xy[0]).T) > _MOVED
-    on_path = robot_xy[moved] if moved.any() else robot_xy[-1:]
-    # thinned so the polyline distance stays cheap: 500 vertices of a path of a few metres are
-    # centimetres apart, and the chord error of that is far below a millimetre
-    on_path = on_path[::max(1, len(on_path) // _ROBOT_POINTS)]
-    path = source_xy[::max(1, len(source_xy) // _PATH_VERTICES)]
-    if len(source_xy) and not np.array_equal(path[-1], source_xy[-1]):
-        path = np.vstack([path, source_xy[-1:]])
-    path = np.vstack([robot_xy[:1], path])
-    return _figures(distance[-1], distance.min(), on_path, path, stop_distance)
-
-
-def _figures(final_distance, min_distance, on_path, path, stop_distance):
-    deviation = distance_to_polyline(on_path, path)
-    return {
-        "final_distance_to_source_m": float(final_distance),
-        "final_position_error_m": float(abs(final_distance - stop_distance)),
-        "min_distance_to_source_m": float(min_distance),
-        "path_rmse_m": float(np.sqrt(np.mean(deviation ** 2))),
-    }
-
-
-def tracking_summary_from_csv(path, stop_distance, chunk_rows=None):
-    """:func:`tracking_summary` of a ``results.csv``, read twice in chunks of bounded size.
-
-    The first pass counts the rows and the rows where the robot has moved and keeps the
-    running minimum and the last distance; the second picks the same thinned points as
-    :func:`tracking_summary` does from whole arrays. Memory is bounded by ``chunk_rows`` and
-    the thinned point counts (about 3,000 robot points and 500 path vertices, at most twice
-    that), not by the run's length.
-
-    Parameters
-    ----------
-    path : path-like
-        A results file with the columns ``plant.x``, ``plant.y``, ``source.x``, ``source.y``.
-    stop_distance : float
-        The distance at which the planner is meant to stop, in m.
-    chunk_rows : int, optional
-        Rows parsed at a time (default :data:`orchestrator.run.results.DEFAULT_CHUNK_ROWS`).
-
-    Returns
-    -------
-    dict
-        As :func:`tracking_summary`; empty if the file holds no complete row.
-    """
-    from orchestrator.run.results import DEFAULT_CHUNK_ROWS, iter_result_chunks
-
-    chunk_rows = chunk_rows or DEFAULT_CHUNK_ROWS
+    robot_columns, source_columns = SONOTRACK.robot_position, SONOTRACK.source_position
 
     def chunks():
-        for chunk in iter_result_chunks(path, _TRACE_COLUMNS, chunk_rows):
-            robot = np.column_stack([chunk["plant.x"], chunk["plant.y"]])
-            source = np.column_stack([chunk["source.x"], chunk["source.y"]])
-            yield robot, source
+        for chunk in rows.chunks(robot_columns + source_columns):
+            yield (chunk, np.column_stack([chunk[c] for c in robot_columns]),
+                   np.column_stack([chunk[c] for c in source_columns]))
 
-    rows = moved_rows = 0
+    count = moved_count = 0
     start = last_robot = None
     final_distance, min_distance = None, np.inf
-    for robot, source in chunks():
+    for chunk, robot, _ in chunks():
         if start is None:
             start = robot[0].copy()
-        distance = np.hypot(*(robot - source).T)
-        min_distance = min(min_distance, distance.min())
+        distance = source_distance(chunk)
+        min_distance = np.minimum(min_distance, distance.min())   # NaN stays NaN
         final_distance = distance[-1]
-        moved_rows += int(np.count_nonzero(np.hypot(*(robot - start).T) > _MOVED))
-        rows += len(robot)
+        moved_count += int(np.count_nonzero(np.hypot(*(robot - start).T) > _MOVED))
+        count += len(robot)
         last_robot = robot[-1:].copy()
-    if rows == 0:
+    if count == 0:
         return {}
 
-    path_every = max(1, rows // _PATH_VERTICES)
-    robot_every = max(1, moved_rows // _ROBOT_POINTS)
+    # thinned so the polyline distance stays cheap: 500 vertices of a path of a few metres are
+    # centimetres apart, and the chord error of that is far below a millimetre
+    path_every = max(1, count // _PATH_VERTICES)
+    robot_every = max(1, moved_count // _ROBOT_POINTS)
     path_parts, robot_parts = [], []
     seen = moved_seen = 0
     last_source = None
-    for robot, source in chunks():
+    for _, robot, source in chunks():
         path_parts.append(source[(-seen) % path_every::path_every].copy())
         moved = np.hypot(*(robot - start).T) > _MOVED
         on_path = robot[moved]
@@ -171,5 +152,11 @@ def tracking_summary_from_csv(path, stop_distance, chunk_rows=None):
     if not np.array_equal(path[-1], last_source[0]):
         path = np.vstack([path, last_source])
     path = np.vstack([start[None, :], path])
-    on_path = np.concatenate(robot_parts) if moved_rows else last_robot
-    return _figures(final_distance, min_distance, on_path, path, stop_distance)
+    on_path = np.concatenate(robot_parts) if moved_count else last_robot
+    deviation = distance_to_polyline(on_path, path)
+    return {
+        "final_distance_to_source_m": float(final_distance),
+        "final_position_error_m": float(abs(final_distance - stop_distance)),
+        "min_distance_to_source_m": float(min_distance),
+        "path_rmse_m": float(np.sqrt(np.mean(deviation ** 2))),
+    }

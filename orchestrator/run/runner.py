@@ -4,6 +4,10 @@
 checks the system and the scenario before t0 (every problem at once), then steps the master
 with a progress bar, streaming results to disk; if an FMU fails, the rows so far and a
 summary saying what failed stay on disk and :class:`SimulationError` is raised.
+
+What the run needs is resolved once into a :class:`~orchestrator.run.plan.RunPlan`; what is
+particular to the sonotrack system (the planner's stop distance, the columns always
+recorded) comes from :mod:`orchestrator.system.sonotrack`, never from here.
 """
 
 import math
@@ -12,8 +16,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from components.common.errors import ConfigError, RunInterrupted, SimulationError
+from orchestrator.run.plan import BACKENDS, RunPlan, plan_run
 
-__all__ = ["BACKENDS", "RunResult", "run_scenario", "instance_parameters"]
+__all__ = ["BACKENDS", "RunResult", "run_scenario"]
 
 
 @dataclass
@@ -26,97 +31,6 @@ class RunResult:
     summary_json: Path
     plots: list = field(default_factory=list)
     plots_error: str | None = None
-
-
-def instance_parameters(system, scenario):
-    """Merge ``.ssd`` bindings, scenario overrides and the seed into per-instance dicts.
-
-    Raises
-    ------
-    ConfigError
-        Listing every override that names an unknown instance or parameter.
-    """
-    per_instance = {c.name: {} for c in system.components}
-    for key, value in system.parameter_values.items():
-        instance, name = key.split(".", 1)
-        # a waypoint CSV bound in the .ssd or an .ssv resolves from that file's folder
-        per_instance[instance][name] = value.run_value() if hasattr(value, "run_value") else value
-    problems = []
-    for key, value in scenario.parameters.items():
-        instance, dot, name = key.partition(".")
-        if instance not in per_instance:
-            problems.append(f"parameters.{key}: no instance {instance!r}; instances are "
-                            f"{', '.join(per_instance)}")
-            continue
-        component = system.component(instance)
-        parameters = [v.name for v in component.model_description.modelVariables
-                      if v.causality == "parameter"]
-        if name not in parameters:
-            problems.append(f"parameters.{key}: {instance} has no parameter {name!r}; "
-                            f"valid: {', '.join(parameters)}")
-            continue
-        per_instance[instance][name] = value
-    where = getattr(scenario, "source", None) or getattr(scenario, "path", "scenario")
-    if problems:
-        raise ConfigError(f"{where}: " + "; ".join(problems))
-    faults = getattr(scenario, "faults", ())
-    if faults:
-        from orchestrator.scenario.faults import SCHEDULE_PARAMETER, fault_parameters
-
-        for instance, text in fault_parameters(system, faults, where).items():
-            if f"{instance}.{SCHEDULE_PARAMETER}" in scenario.parameters:
-                raise ConfigError(f"{where}: parameters.{instance}.{SCHEDULE_PARAMETER} and "
-                                  f"[[faults]] both set {instance}'s schedule; keep one")
-            per_instance[instance][SCHEDULE_PARAMETER] = text
-    for component in system.components:
-        names = {v.name for v in component.model_description.modelVariables
-                 if v.causality == "parameter"}
-        if "seed" in names and f"{component.name}.seed" not in scenario.parameters:
-            per_instance[component.name]["seed"] = int(scenario.seed)
-    return per_instance
-
-
-def _rates(system, scenario):
-    rates = {}
-    for component in system.components:
-        step = scenario.steps.get(component.name, scenario.base_step)
-        ratio = step / scenario.base_step
-        rate = int(round(ratio))
-        if rate < 1 or not math.isclose(ratio, rate, rel_tol=1e-9):
-            raise ConfigError(f"steps.{component.name} = {step} is not a positive integer "
-                              f"multiple of base_step = {scenario.base_step}")
-        rates[component.name] = rate
-    return rates
-
-
-# Recorded whatever the scenario lists: the summary's figures are computed from them.
-_SUMMARY_COLUMNS = ("source.x", "source.y", "plant.x", "plant.y", "plant.heading",
-                    # the robustness section (orchestrator/run/fault_metrics.py)
-                    "plant.speed", "plant.slip_left", "plant.slip_right",
-                    "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
-                    "localizer.faults_active", "source.faults_active", "plant.faults_active")
-
-
-def _recorded_columns(system, scenario):
-    if scenario.outputs:
-        for name in scenario.outputs:
-            system.variable(name)  # raises a ConfigError naming the valid variables
-        extra = [c for c in _SUMMARY_COLUMNS if c not in scenario.outputs]
-        for name in list(extra):
-            try:
-                system.variable(name)
-            except ConfigError:
-                extra.remove(name)
-        return list(scenario.outputs) + extra
-    columns = []
-    for component in system.components:
-        for v in component.model_description.modelVariables:
-            if v.causality == "output" and v.type in ("Real", "Integer", "Boolean"):
-                columns.append(f"{component.name}.{v.name}")
-    return columns
-
-
-BACKENDS = ("fmi", "in-process")
 
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
@@ -194,12 +108,8 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
         scenario = load_scenario(scenario, allow_outside=allow_outside)
     if system is None:
         system = load_system(scenario.system, fmu_dir=fmu_dir, allow_outside=allow_outside)
-    parameters = instance_parameters(system, scenario)
-    rates = _rates(system, scenario)
-    columns = _recorded_columns(system, scenario)
-    order = system.stepping_order()
-    if backend not in BACKENDS:
-        raise ConfigError(f"backend {backend!r} is not one of {', '.join(BACKENDS)}")
+    plan = plan_run(scenario, system, algorithm=algorithm, record_interval=record_interval,
+                    backend=backend, fsync=fsync, handles=handles)
     folder = RunFolder(out_dir, own_files=PLOT_FILES, fsync=sync_summary)
     folder.check()
     renderer = None
@@ -208,36 +118,34 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
         renderer = PlotRenderer()   # imports matplotlib on another core while we step
     try:
-        return _run(scenario, system, parameters, rates, columns, order, backend, handles,
-                    algorithm, record_interval, fsync, folder, progress, renderer)
+        return _run(plan, folder, progress, renderer)
     finally:
         if renderer is not None:
             renderer.close()
 
 
-def _run(scenario, system, parameters, rates, columns, order, backend, handles, algorithm,
-         record_interval, fsync, folder, progress, renderer):
-    """run_scenario once its inputs are checked and its folder is ready."""
+def _run(plan: RunPlan, folder, progress, renderer):
+    """run_scenario once its plan is made and its folder is ready."""
     from orchestrator.fmu.handle import FmuInstance
     from orchestrator.run.master import InstanceSpec, Link, Master
-    from orchestrator.run.summary import TRACE_COLUMNS, RowTrace
+    from orchestrator.run.summary import RowTrace
     from orchestrator.run.signals import StopSignals
 
-    if backend == "fmi":
-        make = handles or FmuInstance
-        instances = {name: make(system.component(name).fmu_path, name) for name in order}
+    scenario, system, columns = plan.scenario, plan.system, plan.columns
+    if plan.backend == "fmi":
+        make = plan.handles or FmuInstance
+        instances = {name: make(system.component(name).fmu_path, name) for name in plan.order}
     else:
         from orchestrator.fmu.inprocess import SlaveInstance
 
         instances = {name: SlaveInstance(system.component(name).model_description.modelName,
-                                         name) for name in order}
-    specs = [InstanceSpec(name, instances[name], rates[name], parameters[name])
-             for name in order]
+                                         name) for name in plan.order}
+    specs = [InstanceSpec(name, instances[name], plan.rates[name], plan.parameters[name])
+             for name in plan.order]
     links = [Link(str(c.start), str(c.end)) for c in system.connections]
-    master = Master(specs, links, scenario.base_step, algorithm or scenario.master,
-                    observed=columns)
+    master = Master(specs, links, scenario.base_step, plan.algorithm, observed=columns)
 
-    record_every = max(1, int(round(record_interval / scenario.base_step)))
+    record_every = plan.record_every
     # scenarios start at t = 0 (the schema has no start time); time is t0 + k * base_step
     start_time = 0.0
     steps_total = scenario.step_count
@@ -268,9 +176,8 @@ def _run(scenario, system, parameters, rates, columns, order, backend, handles, 
             master.initialize(start_time=start_time, stop_time=scenario.stop_time)
             read_row = _ColumnReader(master, system, columns)
             bar = _progress(steps_total, scenario, progress)
-            recorder = _open_recorder(folder.results_csv, columns, fsync)
-            trace = RowTrace(columns, steps_total // record_every + 1,
-                             getattr(scenario, "faults", ()))
+            recorder = _open_recorder(folder.results_csv, columns, plan.fsync)
+            trace = RowTrace(columns, plan.expected_rows, getattr(scenario, "faults", ()))
             row = read_row()
             recorder.record(start_time, row)
             trace.append(start_time, row)
@@ -319,18 +226,17 @@ def _run(scenario, system, parameters, rates, columns, order, backend, handles, 
     })
     if error is None:
         summary.pop("error", None)
-    if recorder is not None and recorder.rows > 1 and all(c in columns for c in TRACE_COLUMNS):
-        from orchestrator.run.summary import summary_figures, summary_figures_from_csv
+    if recorder is not None and recorder.rows > 1:
+        from orchestrator.run.summary import ResultRows, has_figures, summary_figures
 
-        stop_distance = float(parameters.get("planner", {}).get(
-            "stop_distance", _start_value(system, "planner", "stop_distance", 0.0)))
-        summary["stop_distance_m"] = stop_distance
-        faults = getattr(scenario, "faults", ())
-        if error is None and trace.kept and trace.rows == recorder.rows:
-            summary.update(summary_figures(trace, faults, stop_distance))
-        else:   # the file is the record of what a failed or long run kept
-            summary.update(summary_figures_from_csv(folder.results_csv, faults, stop_distance))
-        error = _non_finite_metrics(summary, error)
+        if has_figures(columns):
+            summary["stop_distance_m"] = plan.stop_distance
+            # the file is the record of what a failed or long run kept
+            kept = error is None and trace.kept and trace.rows == recorder.rows
+            rows = trace if kept else ResultRows(folder.results_csv)
+            summary.update(summary_figures(rows, getattr(scenario, "faults", ()),
+                                           plan.stop_distance))
+            error = _non_finite_metrics(summary, error)
     interrupted = summary["status"] == "interrupted"
     drawing = (renderer is not None and not interrupted and recorder is not None
                and recorder.rows > 1)
@@ -401,17 +307,6 @@ def _close_quietly(recorder, master, bar):
                 close()
             except Exception:
                 pass
-
-
-def _start_value(system, instance, name, default):
-    try:
-        component = system.component(instance)
-    except ConfigError:
-        return default
-    for v in component.model_description.modelVariables:
-        if v.name == name and v.start is not None:
-            return float(v.start)
-    return default
 
 
 class _ColumnReader:

@@ -1,18 +1,27 @@
-"""The figures in a run's summary, kept from the rows as the recorder writes them.
+"""The figures in a run's summary, computed once over a stream of row chunks from either source.
 
-The summary's tracking figures (:func:`orchestrator.run.metrics.tracking_summary`) and its
-robustness section (:func:`orchestrator.run.fault_metrics.fault_summary`) read about fifteen of
-the recorded columns. Re-reading them from ``results.csv`` after the run parses the file
-three times; a :class:`RowTrace` instead copies those columns of each row into a
-preallocated array as the row is recorded (one C-level copy of a tuple per row), and
-:func:`summary_figures` computes the same figures from it. They are the same numbers: the
-CSV holds each float's shortest round-tripping text, so it parses back to the very values
-the trace kept (``tests/unit/orchestrator/run/test_summary.py`` checks both ways agree).
+A *row source* holds some recorded columns of a run and yields its rows in chunks:
+
+- ``names``: the columns it holds (``time`` first);
+- ``chunks(columns)``: a new pass over every row, as successive ``{column: array}`` blocks of
+  the columns asked for (each one of ``names``).
+
+The figure functions (:func:`~orchestrator.run.metrics.tracking_summary`,
+:func:`~orchestrator.run.fault_metrics.fault_summary`, and :func:`summary_figures` which
+gathers them) read any source, as many passes as they need. There are two sources:
+
+- :class:`RowTrace`: the summary's columns of each row, copied into a preallocated array as
+  the recorder writes the row (one C-level copy of a tuple per row); one chunk;
+- :class:`ResultRows`: ``results.csv`` read back in bounded chunks.
+
+They give the same numbers: the CSV holds each float's shortest round-tripping text, so it
+parses back to the very values the trace kept (``tests/unit/orchestrator/run/test_summary.py``
+checks both ways agree).
 
 Memory stays bounded: a run recording more than :data:`MAX_TRACE_ROWS` rows (400 simulated
-seconds at the default 20 ms) keeps no trace, and its figures are read back from the file in
-chunks (:func:`summary_figures_from_csv`), as they are for a run that did not end ``ok``
-(the file, not the trace, is then the record of what was kept).
+seconds at the default 20 ms) keeps no trace, and its figures are read back from the file,
+as they are for a run that did not end ``ok`` (the file, not the trace, is then the record
+of what was kept).
 """
 
 import operator
@@ -20,19 +29,30 @@ import operator
 import numpy as np
 
 from orchestrator.run.fault_metrics import fault_columns, fault_summary
-from orchestrator.run.metrics import tracking_summary, tracking_summary_from_csv
+from orchestrator.run.metrics import tracking_summary
+from orchestrator.system.sonotrack import SONOTRACK
 
-__all__ = ["MAX_TRACE_ROWS", "TRACE_COLUMNS", "RowTrace", "summary_figures",
-           "summary_figures_from_csv"]
+__all__ = ["MAX_TRACE_ROWS", "TRACE_COLUMNS", "ResultRows", "RowTrace", "has_figures",
+           "summary_columns", "summary_figures"]
 
 # 20,000 rows of ~15 columns: 2.4 MB at most, whatever the run's length.
 MAX_TRACE_ROWS = 20_000
 # Without these four there are no tracking figures (and no robustness section).
-TRACE_COLUMNS = ("plant.x", "plant.y", "source.x", "source.y")
+TRACE_COLUMNS = SONOTRACK.position_columns
+
+
+def has_figures(columns):
+    """Whether a run recording ``columns`` gets summary figures (all of :data:`TRACE_COLUMNS`)."""
+    return all(c in columns for c in TRACE_COLUMNS)
+
+
+def summary_columns(faults=()):
+    """Every column the summary's figures read, ``time`` first, for a scenario's ``faults``."""
+    return list(dict.fromkeys(("time",) + TRACE_COLUMNS + tuple(fault_columns(faults))))
 
 
 class RowTrace:
-    """The summary's columns of every recorded row, in memory.
+    """The summary's columns of every recorded row, in memory: a row source of one chunk.
 
     Parameters
     ----------
@@ -43,11 +63,19 @@ class RowTrace:
         if that is more than :data:`MAX_TRACE_ROWS`.
     faults : sequence of (str, Fault)
         The scenario's faults (their targets' ``faults_active`` columns are kept too).
+
+    Attributes
+    ----------
+    names : list of str
+        ``time`` and the columns of :func:`summary_columns` that are recorded.
+    rows : int
+        Rows appended so far.
+    kept : bool
+        Whether every row appended so far is held.
     """
 
     def __init__(self, columns, expected_rows, faults=()):
-        wanted = list(dict.fromkeys(TRACE_COLUMNS + tuple(fault_columns(faults))))
-        self.names = ["time"] + [c for c in wanted if c != "time" and c in columns]
+        self.names = ["time"] + [c for c in summary_columns(faults)[1:] if c in columns]
         self.rows = 0
         self.kept = 0 < expected_rows <= MAX_TRACE_ROWS
         self._capacity = expected_rows if self.kept else 0
@@ -72,29 +100,61 @@ class RowTrace:
         """``{column: array}`` of the rows kept (views, not copies)."""
         return {name: self._values[:self.rows, i] for i, name in enumerate(self.names)}
 
+    def chunks(self, columns):
+        """Yield the rows kept as one ``{column: array}`` chunk (views), none if empty."""
+        if self.rows:
+            index = {name: i for i, name in enumerate(self.names)}
+            yield {name: self._values[:self.rows, index[name]] for name in columns}
 
-def summary_figures(trace, faults, stop_distance):
-    """The tracking figures and the ``robustness`` section from a complete :class:`RowTrace`.
+
+class ResultRows:
+    """A run's ``results.csv`` as a row source, read back in chunks of bounded size.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``results.csv``.
+    chunk_rows : int, optional
+        Rows parsed at a time (default :data:`orchestrator.run.results.DEFAULT_CHUNK_ROWS`).
+
+    Attributes
+    ----------
+    names : list of str
+        The file's columns (its header).
+    """
+
+    def __init__(self, path, chunk_rows=None):
+        from orchestrator.run.results import DEFAULT_CHUNK_ROWS, read_header
+
+        self.path = path
+        self.chunk_rows = chunk_rows or DEFAULT_CHUNK_ROWS
+        self.names = read_header(path)
+
+    def chunks(self, columns):
+        """Yield successive ``{column: array}`` blocks of at most ``chunk_rows`` rows."""
+        from orchestrator.run.results import iter_result_chunks
+
+        return iter_result_chunks(self.path, columns, self.chunk_rows)
+
+
+def summary_figures(rows, faults, stop_distance):
+    """The tracking figures and the ``robustness`` section of a run.
+
+    Parameters
+    ----------
+    rows : RowTrace or ResultRows
+        The run's rows: kept while recording, or read back from ``results.csv``.
+    faults : sequence of (str, Fault)
+        The scenario's faults.
+    stop_distance : float
+        The planner's stop distance [m].
 
     Returns
     -------
     dict
-        As :func:`summary_figures_from_csv` on the file the same rows were written to.
+        :func:`~orchestrator.run.metrics.tracking_summary`'s figures and ``robustness``,
+        :func:`~orchestrator.run.fault_metrics.fault_summary`'s.
     """
-    data = trace.columns()
-    figures = tracking_summary(data["time"],
-                               np.column_stack([data["plant.x"], data["plant.y"]]),
-                               np.column_stack([data["source.x"], data["source.y"]]),
-                               stop_distance)
-    figures["robustness"] = fault_summary([data], trace.names, faults, stop_distance)
-    return figures
-
-
-def summary_figures_from_csv(path, faults, stop_distance):
-    """The tracking figures and the ``robustness`` section read back from ``results.csv``
-    in bounded chunks (the reference :func:`summary_figures` is checked against)."""
-    from orchestrator.run.fault_metrics import fault_summary_from_csv
-
-    figures = tracking_summary_from_csv(path, stop_distance)
-    figures["robustness"] = fault_summary_from_csv(path, faults, stop_distance)
+    figures = tracking_summary(rows, stop_distance)
+    figures["robustness"] = fault_summary(rows, faults, stop_distance)
     return figures

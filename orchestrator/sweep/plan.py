@@ -184,8 +184,7 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
     ConfigError
         Listing every problem found.
     """
-    from orchestrator.run.runner import instance_parameters
-    from orchestrator.sweep.inputs import input_digests, run_key
+    from orchestrator.run.parameters import instance_parameters
     from orchestrator.system import load_system
 
     seeds = list(seeds) if seeds else [base.seed]
@@ -194,24 +193,10 @@ def plan_runs(base, grid, out_dir, seeds=None, fmu_dir=None, system=None, allow_
     problems = _check_names(system, grid)
     if problems:
         raise ConfigError("; ".join(problems))
-    out_dir = Path(out_dir).resolve()
-    planned, keys, cache = [], set(), {}
-    for overrides, seed in expand_grid(grid, seeds):
-        try:
-            scenario = base.with_overrides(parameters=_absolute_files(overrides), seed=seed)
-            instance_parameters(system, scenario)
-        except ConfigError as exc:
-            problems.append(str(exc))
-            continue
-        digests = input_digests(scenario, system, cache)
-        key = run_key(scenario, digests)
-        if key in keys:
-            continue
-        keys.add(key)
-        planned.append(PlannedRun({**overrides, "seed": seed}, scenario, key,
-                                  out_dir / "runs" / key, digests))
-    _raise_problems(problems)
-    return planned
+    runs = (({**overrides, "seed": seed}, system, base,
+             {"parameters": _absolute_files(overrides), "seed": seed})
+            for overrides, seed in expand_grid(grid, seeds))
+    return _plan(runs, out_dir, instance_parameters)
 
 
 def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outside=False,
@@ -244,8 +229,7 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     ConfigError
         Listing every problem found.
     """
-    from orchestrator.run.runner import instance_parameters
-    from orchestrator.sweep.inputs import input_digests, run_key
+    from orchestrator.run.parameters import instance_parameters
     from orchestrator.system import load_system
 
     scenarios = list(scenarios)
@@ -254,15 +238,49 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     settings = list(settings)
     if len(settings) != len(scenarios):
         raise ConfigError(f"{len(settings)} settings for {len(scenarios)} scenarios")
+    systems = dict(systems or {})
+
+    def runs():
+        for scenario, named in zip(scenarios, settings):
+            if scenario.system not in systems:  # each .ssd loaded once, when first needed
+                systems[scenario.system] = load_system(scenario.system, fmu_dir=fmu_dir,
+                                                       allow_outside=allow_outside)
+            yield named, systems[scenario.system], scenario, None
+
+    return _plan(runs(), out_dir, instance_parameters)
+
+
+def _plan(runs, out_dir, check_parameters):
+    """The planning loop of :func:`plan_runs` and :func:`plan_scenarios`.
+
+    Each run is checked, keyed by everything it reads and kept once per key; the problems of
+    all runs are raised together at the end.
+
+    Parameters
+    ----------
+    runs : iterable of (dict, orchestrator.system.System, Scenario, dict or None)
+        Per run: its settings (its row in the table), its system, its scenario, and the
+        changes to make to that scenario (keywords of ``Scenario.with_overrides``; None to run
+        it as it is). Read one at a time, so a system can be loaded when first needed.
+    out_dir : path-like
+        The sweep's folder.
+    check_parameters : callable
+        ``check_parameters(system, scenario)`` raises ConfigError if the scenario's parameters
+        do not fit the system's instances (the run layer's ``instance_parameters``).
+
+    Returns
+    -------
+    list of PlannedRun
+    """
+    from orchestrator.sweep.inputs import input_digests, run_key
+
     out_dir = Path(out_dir).resolve()
-    systems, cache, problems, planned, keys = dict(systems or {}), {}, [], [], set()
-    for scenario, named in zip(scenarios, settings):
-        if scenario.system not in systems:
-            systems[scenario.system] = load_system(scenario.system, fmu_dir=fmu_dir,
-                                                   allow_outside=allow_outside)
-        system = systems[scenario.system]
+    planned, keys, cache, problems = [], set(), {}, []
+    for settings, system, scenario, changes in runs:
         try:
-            instance_parameters(system, scenario)
+            if changes is not None:
+                scenario = scenario.with_overrides(**changes)
+            check_parameters(system, scenario)
         except ConfigError as exc:
             problems.append(str(exc))
             continue
@@ -270,7 +288,7 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
         key = run_key(scenario, digests)
         if key not in keys:
             keys.add(key)
-            planned.append(PlannedRun(dict(named), scenario, key, out_dir / "runs" / key,
+            planned.append(PlannedRun(dict(settings), scenario, key, out_dir / "runs" / key,
                                       digests))
     _raise_problems(problems)
     return planned

@@ -269,7 +269,7 @@ def warm_up(tasks, folder, warm=None):
 
 def _run(task, warm):
     from components.common.errors import ConfigError
-    from orchestrator.run.runner import run_scenario
+    from orchestrator.run import run_scenario
 
     scenario = task.scenario
     system = warm.system(scenario.system, task.fmu_dir, task.allow_outside)

@@ -13,12 +13,15 @@ One concept per module:
 - :mod:`.graph`: direct feedthrough, algebraic loops and the Gauss-Seidel stepping order
   (documented in ``docs/system.md`` and :func:`gauss_seidel_order`);
 - :mod:`.checks`: every problem of a description against its FMUs;
-- :mod:`.loading`: reading the files into a :class:`System`.
+- :mod:`.loading`: reading the files into a :class:`System`;
+- :mod:`.sonotrack`: what is particular to the sonotrack system (which instance plays which
+  role, where the stop distance comes from, the columns a run's summary reads).
 """
 
 from .checks import SystemDescriptionError, check_system
 from .graph import algebraic_loops, direct_dependencies, gauss_seidel_order
 from .loading import System, SystemComponent, load_system
+from .sonotrack import SONOTRACK, SonotrackSystem
 from .variables import ResolvedConnection, Variable, variable_unit
 
 __all__ = [
@@ -33,4 +36,6 @@ __all__ = [
     "gauss_seidel_order",
     "check_system",
     "load_system",
+    "SonotrackSystem",
+    "SONOTRACK",
 ]

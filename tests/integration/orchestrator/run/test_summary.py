@@ -1,7 +1,7 @@
 """A run's summary figures, kept row by row while it steps, equal the re-read of its file.
 
-The reference is :func:`orchestrator.run.summary.summary_figures_from_csv`: the chunked
-re-read of ``results.csv`` the summary used to be computed with.
+The reference is :func:`orchestrator.run.summary.summary_figures` over
+:class:`~orchestrator.run.summary.ResultRows`: the chunked re-read of ``results.csv``.
 """
 
 import json
@@ -12,7 +12,7 @@ import pytest
 from orchestrator.run import summary as run_metrics
 from orchestrator.builder.fmus import REPO_ROOT
 from orchestrator.run.runner import run_scenario
-from orchestrator.run.summary import summary_figures_from_csv
+from orchestrator.run.summary import ResultRows, summary_figures
 from orchestrator.scenario import load_scenario
 from tests.support.json_leaves import leaves
 
@@ -35,8 +35,8 @@ def test_summary_figures_equal_the_chunked_reread(path, record_interval, bound, 
     scenario = load_scenario(path)
     result = run_scenario(scenario, tmp_path / "run", progress=False, fmu_dir=fmu_dir,
                           plots=False, record_interval=record_interval)
-    reference = summary_figures_from_csv(result.results_csv, scenario.faults,
-                                         result.summary["stop_distance_m"])
+    reference = summary_figures(ResultRows(result.results_csv), scenario.faults,
+                                result.summary["stop_distance_m"])
     on_disk = json.loads(result.summary_json.read_text())
     for key, value in leaves(reference):
         ours = dict(leaves(on_disk))[key]

@@ -7,7 +7,7 @@ import pytest
 
 from components.common.errors import ConfigError
 from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_fit_radius,
-                                   distance_to_path, path_length, path_rmse, resample_path,
+                                   distance_to_polyline, path_length, path_rmse, resample_path,
                                    tangent_arc_path)
 
 
@@ -126,12 +126,15 @@ def test_apex_offsets_signs_inside_and_outside():
     assert apex_offsets(straight, straight) == []
 
 
-def test_distance_to_path_equals_the_segment_distance_of_metrics():
-    from orchestrator.run.metrics import distance_to_polyline
+def test_the_studies_use_the_one_polyline_distance():
+    """The path RMSE of a study and the run summary's measure a point's distance alike: a
+    point 0.3 m beside an L-shaped path, one 0.5 m past its end and one at its corner."""
+    from orchestrator.run import metrics
 
-    rng = np.random.default_rng(1)
-    polyline = np.cumsum(rng.normal(size=(300, 2)), axis=0)
-    points = rng.normal(size=(1000, 2)) * 10
-    expected = distance_to_polyline(points, polyline)
-    assert np.allclose(distance_to_path(points, polyline, chunk=64), expected, atol=1e-12)
-    assert np.allclose(distance_to_path(points, polyline[:1]), np.hypot(*(points - polyline[0]).T))
+    assert distance_to_polyline is metrics.distance_to_polyline
+    corner = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]])
+    assert distance_to_polyline([[1.0, 0.3], [2.0, 1.5], [2.0, 0.0]], corner).tolist() == [
+        pytest.approx(0.3, abs=1e-15), 0.5, 0.0]
+    # resampled every 5 mm along the line x = 0.3, the path is 0.3 m from the corner's leg
+    path = np.column_stack([np.full(201, 0.3), np.linspace(-1.0, 0.0, 201)])
+    assert path_rmse(path, np.array([[0.0, -1.0], [0.0, 0.0]])) == pytest.approx(0.3, abs=1e-12)

@@ -2,10 +2,12 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from components.common.faults import Fault
-from orchestrator.run.fault_metrics import SLIP_THRESHOLD, fault_summary_from_csv
+from orchestrator.run.fault_metrics import SLIP_THRESHOLD, fault_summary
+from orchestrator.run.summary import ResultRows, RowTrace
 
 _COLUMNS = ("time", "plant.x", "plant.y", "source.x", "source.y", "plant.speed",
             "plant.slip_left", "plant.slip_right", "localizer.fix_attempts",
@@ -18,7 +20,8 @@ def _write(path, rows):
     path.write_text("\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("chunk_rows", [1, 3, 1000], ids=["row by row", "chunks", "whole"])
+@pytest.mark.parametrize("chunk_rows", [1, 3, 1000, None],
+                         ids=["row by row", "chunks", "whole", "kept rows"])
 def test_counts_and_extremes(tmp_path, chunk_rows):
     rows = []
     # 20 rows, 0.05 s apart; attempts every other row; the robot drives to 0.5 m and stops
@@ -36,7 +39,13 @@ def test_counts_and_extremes(tmp_path, chunk_rows):
     path = tmp_path / "results.csv"
     _write(path, rows)
     faults = [("localizer", Fault("mic_dead", 0.2, 0.5, channel="M1"))]
-    summary = fault_summary_from_csv(path, faults, stop_distance=0.4, chunk_rows=chunk_rows)
+    if chunk_rows is None:   # the rows as a run keeps them while recording
+        rows_source = RowTrace(_COLUMNS[1:], len(rows), faults)
+        for row in rows:
+            rows_source.append(row[0], row[1:])
+    else:
+        rows_source = ResultRows(path, chunk_rows)
+    summary = fault_summary(rows_source, faults, stop_distance=0.4)
     assert summary["invalid_fixes"] == {"a microphone record is dead": 3,
                                         "fix lost (dropped before it was taken)": 1,
                                         "no burst onset detected": 1, "unrecorded": 1}
@@ -57,9 +66,31 @@ def test_too_close_is_not_safe_and_missing_columns_are_named(tmp_path):
     path = tmp_path / "results.csv"
     path.write_text("time,plant.x,plant.y,source.x,source.y,plant.speed\n"
                     "0.0,0.0,0.0,0.0,1.0,0.0\n0.1,0.0,0.9,0.0,1.0,0.0\n")
-    summary = fault_summary_from_csv(path, (), stop_distance=0.5)
+    summary = fault_summary(ResultRows(path), (), stop_distance=0.5)
     assert summary["stopped_safely"] is False           # 0.1 m < 0.25 m
     assert "localizer.fix_status" in summary["not_recorded"]
     assert summary["invalid_fixes"] == {} and summary["fixes_rejected_by_gate"] is None
     assert summary["odometry_check_stops"] is None
     assert not math.isnan(summary["max_body_speed_m_s"])
+
+
+def test_survival_checks_against_the_planner_limits():
+    """v_max 0.3 m/s allows 0.315 m/s; stop_distance 0.5 m forbids 0.25 m and asks for a
+    final distance within 0.3 m of it (recovered) or, after a permanent fault, a stop."""
+    from types import SimpleNamespace
+
+    from orchestrator.run.fault_metrics import survival
+
+    data = {"plant.speed": np.array([0.0, 0.31, -0.2, 0.01]),
+            "plant.x": np.zeros(4), "plant.y": np.array([0.0, 1.0, 1.6, 1.8]),
+            "source.x": np.zeros(4), "source.y": np.full(4, 2.6)}
+    passing = SimpleNamespace(parameters={"planner.v_max": 0.3}, faults=[])
+    assert survival(data, passing) == {"finite": True, "speed": True, "no_collision": True,
+                                       "recovered": False}     # 0.8 m from 0.5 m: too far
+    data["plant.y"][-1] = 2.1                                   # 0.5 m away at the end
+    assert survival(data, passing)["recovered"] is True
+    data["plant.y"][-2] = 2.4                                   # 0.2 m < 0.25 m
+    permanent = SimpleNamespace(parameters={"planner.v_max": 0.29},
+                                faults=[("localizer", Fault("mic_dead", 1.0, channel="M1"))])
+    assert survival(data, permanent) == {"finite": True, "speed": False,
+                                         "no_collision": False, "stopped": True}

@@ -1,5 +1,5 @@
-"""Run outputs: atomic writes, the run folder's start order, the results reader, streaming
-figures, and a recorder that keeps no rows."""
+"""Run outputs: atomic writes, the run folder's start order, the results reader, and a
+recorder that keeps no rows (the figures read back from the file: test_metrics.py)."""
 
 import json
 import os
@@ -10,7 +10,6 @@ import pytest
 
 from components.common.errors import ConfigError
 from orchestrator.run import folder as outputs
-from orchestrator.run.metrics import tracking_summary, tracking_summary_from_csv
 from orchestrator.run.folder import RunFolder, atomic_write_bytes, atomic_write_json, read_summary
 from orchestrator.run.recorder import Recorder
 from orchestrator.run.results import count_rows, iter_result_chunks, read_results
@@ -160,48 +159,6 @@ def test_reader_names_a_missing_column(tmp_path):
     path.write_text("time,a.x\n0.0,1.0\n")
     with pytest.raises(ConfigError, match="no column b.y"):
         read_results(path, ["b.y"])
-
-
-# ----- figures from the file --------------------------------------------------------------
-
-def _write_trace(path, robot, source):
-    with Recorder(path, ["plant.x", "plant.y", "source.x", "source.y"]) as recorder:
-        for k, (r, s) in enumerate(zip(robot, source)):
-            recorder.record(k * 0.02, [r[0], r[1], s[0], s[1]])
-
-
-def test_streaming_figures_equal_the_whole_array_figures(tmp_path):
-    """Chunked two-pass figures are bit-identical to the in-memory ones, for any chunk size,
-    on a run long enough to be thinned on both paths (12,000 rows)."""
-    rng = np.random.default_rng(7)
-    n = 12_000
-    t = np.arange(n) * 0.02
-    source = np.column_stack([0.5 * np.sin(t / 20.0), 2.0 + 0.05 * t])
-    robot = source - np.column_stack([np.zeros(n), np.full(n, 0.5)])
-    robot += rng.normal(scale=0.01, size=robot.shape)
-    robot[:40] = 0.0  # standing still at first
-    _write_trace(tmp_path / "r.csv", robot, source)
-    expected = tracking_summary(t, robot, source, 0.5)
-    for chunk_rows in (1, 333, 4096, 100_000):
-        assert tracking_summary_from_csv(tmp_path / "r.csv", 0.5, chunk_rows) == expected
-
-
-def test_streaming_figures_against_geometry(tmp_path):
-    """A robot 0.1 m beside a straight source path, 1 m behind the source: path RMS 0.1 m."""
-    n = 5001
-    y = np.linspace(0.0, 10.0, n)
-    source = np.column_stack([np.zeros(n), y + 2.0])
-    robot = np.column_stack([np.full(n, 0.1), y + 1.0])
-    # the start lies on the source's line, so the reference path (start, then the source's
-    # path) is the line x = 0 and every later robot point is 0.1 m from it
-    robot[0] = (0.0, -5.0)
-    _write_trace(tmp_path / "r.csv", robot, source)
-    figures = tracking_summary_from_csv(tmp_path / "r.csv", 0.5, chunk_rows=512)
-    assert figures["path_rmse_m"] == pytest.approx(0.1, abs=1e-12)
-    assert figures["path_rmse_m"] == tracking_summary(None, robot, source, 0.5)["path_rmse_m"]
-    assert figures["final_distance_to_source_m"] == pytest.approx(np.hypot(0.1, 1.0), 1e-12)
-    assert figures["min_distance_to_source_m"] == pytest.approx(np.hypot(0.1, 1.0), 1e-12)
-    assert figures["final_position_error_m"] == pytest.approx(np.hypot(0.1, 1.0) - 0.5, 1e-12)
 
 
 def test_thinned_read_keeps_no_parsed_block(tmp_path):

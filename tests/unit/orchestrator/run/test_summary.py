@@ -1,6 +1,6 @@
-"""The summary's figures kept row by row (RowTrace) against the chunked re-read of results.csv.
+"""The summary's figures from the rows kept while recording (RowTrace) and from results.csv.
 
-The reference is :func:`summary_figures_from_csv`, which parses the file the
+The reference is :func:`summary_figures` over :class:`ResultRows`, which parses the file the
 :class:`~orchestrator.run.recorder.Recorder` wrote, in blocks of 2,048 rows; the traces below are
 longer than one block so the chunk boundaries are crossed.
 """
@@ -12,8 +12,8 @@ import pytest
 
 from components.common.faults import Fault
 from orchestrator.run.recorder import Recorder
-from orchestrator.run.summary import (MAX_TRACE_ROWS, RowTrace, summary_figures,
-                                      summary_figures_from_csv)
+from orchestrator.run.summary import (MAX_TRACE_ROWS, TRACE_COLUMNS, ResultRows, RowTrace,
+                                      has_figures, summary_columns, summary_figures)
 from tests.support.json_leaves import leaves
 
 COLUMNS = ["source.x", "source.y", "plant.x", "plant.y", "plant.heading", "plant.speed",
@@ -69,7 +69,7 @@ def test_trace_gives_the_figures_of_the_chunked_reread(tmp_path, count, seed, fa
     trace = _record(tmp_path, count, seed, faults)
     assert trace.kept and trace.rows == count
     ours = summary_figures(trace, faults, 0.5)
-    reference = summary_figures_from_csv(tmp_path / "results.csv", faults, 0.5)
+    reference = summary_figures(ResultRows(tmp_path / "results.csv"), faults, 0.5)
     _assert_equal(ours, reference)
     # the figures are not trivially equal: the run has slips, invalid fixes and fault time
     robustness = reference["robustness"]
@@ -88,7 +88,7 @@ def test_a_lost_row_is_caught_by_the_comparison(tmp_path):
                 trace.append(time, row)
     with pytest.raises(AssertionError):
         _assert_equal(summary_figures(trace, (), 0.5),
-                      summary_figures_from_csv(tmp_path / "results.csv", (), 0.5))
+                      summary_figures(ResultRows(tmp_path / "results.csv"), (), 0.5))
 
 
 def test_trace_is_not_kept_past_its_bound_or_its_expected_rows(tmp_path):
@@ -105,26 +105,60 @@ def test_trace_keeps_only_recorded_columns():
     assert trace.columns()["plant.speed"].tolist() == [5.0]
 
 
-def _segment_distance(px, py, ax, ay, bx, by):
-    """Distance from a point to a segment, one scalar at a time (the reference)."""
-    ux, uy = bx - ax, by - ay
-    length2 = ux * ux + uy * uy
-    s = 0.0 if length2 == 0 else min(1.0, max(0.0, ((px - ax) * ux + (py - ay) * uy) / length2))
-    return math.hypot(px - (ax + s * ux), py - (ay + s * uy))
+def test_both_sources_hold_the_same_rows(tmp_path):
+    """The kept rows come as one chunk, the file's in blocks of chunk_rows; joined, the same
+    numbers (the CSV's shortest round-tripping text parses back to the very floats)."""
+    trace = _record(tmp_path, 300, 6)
+    file = ResultRows(tmp_path / "results.csv", chunk_rows=64)
+    assert file.names == ["time"] + COLUMNS
+    assert set(trace.names) == set(summary_columns()) - {"planner.wheel_faults",
+                                                         "planner.odometry_faults"}
+    wanted = ["time", "plant.x", "localizer.fix_status"]
+    kept, read = list(trace.chunks(wanted)), list(file.chunks(wanted))
+    assert [len(c["time"]) for c in kept] == [300]
+    assert [len(c["time"]) for c in read] == [64, 64, 64, 64, 44]
+    for name in wanted:
+        assert np.array_equal(kept[0][name], np.concatenate([c[name] for c in read])), name
+    assert list(kept[0]) == list(read[0]) == wanted
 
 
-def test_distance_to_polyline_against_scalar_geometry():
-    from orchestrator.run.metrics import distance_to_polyline
+def test_the_summary_columns_are_the_figures_columns():
+    assert TRACE_COLUMNS == ("plant.x", "plant.y", "source.x", "source.y")
+    assert summary_columns(FAULTS) == [
+        "time", "plant.x", "plant.y", "source.x", "source.y", "plant.speed", "plant.slip_left",
+        "plant.slip_right", "localizer.fix_attempts", "localizer.fix_status",
+        "planner.rejected_fixes", "planner.wheel_faults", "planner.odometry_faults",
+        "localizer.faults_active", "plant.faults_active"]
+    assert has_figures(["plant.speed", "source.y", "plant.x", "source.x", "plant.y"])
+    assert not has_figures(["plant.x", "plant.y", "source.x", "plant.speed"])
 
-    rng = np.random.default_rng(3)
-    polyline = np.cumsum(rng.normal(size=(60, 2)), axis=0)
-    polyline[20] = polyline[19]   # a repeated vertex: a segment of length zero
-    points = rng.normal(size=(1100, 2)) * 5   # more than two blocks of 512 points
-    ours = distance_to_polyline(points, polyline)
-    reference = [min(_segment_distance(*p, *a, *b) for a, b in zip(polyline[:-1], polyline[1:]))
-                 for p in points]
-    assert np.allclose(ours, reference, rtol=1e-12, atol=1e-12)
-    # exact cases: beside a segment, past its end, on a vertex
-    line = np.array([[-1.0, 0.0], [1.0, 0.0], [1.0, 2.0]])
-    assert distance_to_polyline([[0.0, 1.5], [4.0, 6.0], [1.0, 2.0]], line).tolist() == [
-        1.0, 5.0, 0.0]
+
+def test_figures_of_a_run_known_by_construction(tmp_path):
+    """Five rows 0.1 s apart: the robot drives from (0, 0) towards a source at rest at (0, 2)
+    and stops 0.3 m beside the path with 1.5 m to go; its left wheel slips in rows 1 and 2."""
+    columns = ["plant.x", "plant.y", "source.x", "source.y", "plant.speed", "plant.slip_left",
+               "plant.slip_right"]
+    rows = [(0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0), (0.3, 0.5, 0.0, 2.0, 0.2, 0.3, 0.0),
+            (0.3, 1.0, 0.0, 2.0, 0.25, -0.4, 0.1), (0.3, 1.5, 0.0, 2.0, 0.1, 0.0, 0.0),
+            (0.3, 1.5, 0.0, 2.0, 0.0, 0.0, 0.0)]
+    trace = RowTrace(columns, len(rows))
+    with Recorder(tmp_path / "results.csv", columns) as recorder:
+        for k, row in enumerate(rows):
+            recorder.record(0.1 * k, row)
+            trace.append(0.1 * k, row)
+    for source in (trace, ResultRows(tmp_path / "results.csv", chunk_rows=2)):
+        figures = summary_figures(source, (), 0.5)
+        last = math.hypot(0.3, 0.5)
+        assert figures["final_distance_to_source_m"] == pytest.approx(last, abs=1e-15)
+        assert figures["min_distance_to_source_m"] == pytest.approx(last, abs=1e-15)
+        assert figures["final_position_error_m"] == pytest.approx(last - 0.5, abs=1e-15)
+        # the reference path is (0, 0) -> (0, 2); every moved point is 0.3 m beside it
+        assert figures["path_rmse_m"] == pytest.approx(0.3, abs=1e-15)
+        robustness = figures["robustness"]
+        assert robustness["slip_time_s"] == pytest.approx(0.2, abs=1e-15)
+        assert (robustness["max_slip_ratio"], robustness["max_body_speed_m_s"]) == (0.4, 0.25)
+        assert robustness["stopped_safely"] is True     # at rest, never closer than 0.25 m
+        assert robustness["not_recorded"] == [
+            "localizer.fix_attempts", "localizer.fix_status", "planner.rejected_fixes",
+            "planner.wheel_faults", "planner.odometry_faults"]
+        assert robustness["invalid_fixes"] == {} and robustness["fixes_rejected_by_gate"] is None
