@@ -8,8 +8,9 @@
 - :mod:`~orchestrator.builder.validation`: fmpy's validator, fmu-manipulation-toolbox's checker
   and a short run of each built FMU.
 
-Imports :mod:`orchestrator.report` (the HTML writer), :mod:`orchestrator.ssp` (the archive)
-and :mod:`orchestrator.fmu` (unpacking, for validation).
+Imports :mod:`orchestrator.files` (the atomic writer, to rewrite an FMU in place),
+:mod:`orchestrator.report` (the HTML writer), :mod:`orchestrator.ssp` (the archive) and
+:mod:`orchestrator.fmu` (unpacking, for validation).
 """
 
 from .fmus import (FMU_PACKAGES, REPO_ROOT, build_all, build_fmu, entry_script,

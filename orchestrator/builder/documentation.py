@@ -10,9 +10,7 @@ inline style, no script, no network link.
 """
 
 import ast
-import os
 import re
-import tempfile
 import tomllib
 import zipfile
 from html.parser import HTMLParser
@@ -20,6 +18,7 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from components.common.errors import BuildError
+from orchestrator.files.atomic import atomic_open
 from orchestrator.report.html import Column, HtmlReport
 
 __all__ = ["DOCUMENTATION_FILE", "project_metadata", "add_metadata", "documentation_page",
@@ -280,23 +279,12 @@ def document_fmu(fmu_path, slave_file=None, notes_file=None, metadata=None):
     description = (b'<?xml version="1.0" encoding="UTF-8"?>\n'
                    + ElementTree.tostring(root, encoding="utf-8", xml_declaration=False))
     page = documentation_page(description, slave_file, notes_file)
-    umask = os.umask(0)
-    os.umask(umask)
-    mode = 0o666 & ~umask   # an ordinary file, as if written with open() (mkstemp gives 0600)
-    fd, temporary = tempfile.mkstemp(prefix=fmu_path.name + ".", suffix=".tmp",
-                                     dir=fmu_path.parent)
-    os.close(fd)
-    try:
-        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
-            archive.writestr(_entry("modelDescription.xml"), description)
-            for info, data in entries:
-                archive.writestr(info, data)
-            archive.writestr(_entry(DOCUMENTATION_FILE), page)
-        os.chmod(temporary, mode)
-        os.replace(temporary, fmu_path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    with (atomic_open(fmu_path, fsync=False) as stream,
+          zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as archive):
+        archive.writestr(_entry("modelDescription.xml"), description)
+        for info, data in entries:
+            archive.writestr(info, data)
+        archive.writestr(_entry(DOCUMENTATION_FILE), page)
     return fmu_path
 
 

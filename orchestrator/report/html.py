@@ -1,33 +1,28 @@
-"""Self-contained HTML reports: one file, figures embedded, no network links, no absolute paths.
+"""The HTML rendering of a report: one self-contained file, figures embedded, no outside links.
 
-Shared by ``sonotrack verify`` and ``sonotrack reproduce``. A report is a title, an optional
-lead paragraph and a list of sections; each section holds blocks in order: paragraphs,
-tables, figures, preformatted text or a list. Every string is HTML-escaped; figures are
-embedded as ``data:image/png;base64`` URIs, so the page opens anywhere (mail attachment,
-CI artefact, a folder moved elsewhere) with every figure in it and nothing fetched.
+Renders a :class:`~orchestrator.report.document.Document` (the same one the Markdown is
+rendered from). The page opens anywhere (mail attachment, CI artefact, a folder moved
+elsewhere) with every figure in it and nothing fetched: figures are embedded as
+``data:image/png;base64`` URIs, and a link may only name a file inside the report's folder.
+
+Escaping policy: every string of the document is text and is HTML-escaped; markup is only
+ever built here (:class:`_Raw` marks it, and never holds user text).
 
 API
 ---
-- :class:`HtmlReport` ``(title, intro=None)``; ``report.section(heading, level=2)`` returns a
-  :class:`Section`; ``report.write(path)`` writes the page atomically and returns the path;
-  ``report.render()`` returns the page as a string.
-- :class:`Section` methods, each returns the section (so calls chain):
-  ``paragraph(text)``, ``bullets(items)``, ``preformatted(text)``,
-  ``table(columns, rows, caption=None)``, ``figure(source, caption, alt=None, dpi=110)``.
-  ``source`` is a PNG file path, PNG bytes, or a matplotlib ``Figure`` (saved to PNG in
-  memory at ``dpi``; the figure is not closed).
-- :class:`Column` ``(name, unit=None, format=None)``: a table header with its unit, shown
-  as ``name [unit]``; ``format`` is a :func:`format` spec for numbers (e.g. ``".3f"``).
-  A plain string is accepted as a column without unit.
+- :func:`render_html` ``(document, base_dir=None)``: the page as a string; a figure given as a
+  relative path is read from ``base_dir`` (default: the working folder).
+- :func:`write_html` ``(document, path)``: write the page atomically (figures read relative to
+  the page's folder); returns the path.
+- :class:`HtmlReport` ``(title, intro=None)``: a :class:`Document` with ``render()`` and
+  ``write(path)``, for pages that have no Markdown twin (the FMU documentation).
+- :func:`link` ``(text, relative_path)``: a :class:`~orchestrator.report.document.Link`
+  (an absolute path, ``..`` or a URL with a scheme is refused).
 - :func:`png_data_uri` ``(source, dpi=110)``: the ``data:`` URI of one figure.
 - :func:`embedded_image_sources` ``(html)``: the ``src`` of every ``<img>`` (what the tests
   use to check that every image is embedded data).
 
-Cells: ``None`` and NaN print as an em dash, booleans as "yes"/"no", floats through the
-column's format (default ``.4g``), anything else through ``str``. Text is never
-interpreted as HTML; a link to a file next to the report is ``link(text, relative_path)``
-(an absolute path or a URL with a scheme is refused: the page must not point outside its
-folder or to the network).
+Cells read as :func:`~orchestrator.report.document.cell` says; numbers are right-aligned.
 
 Examples
 --------
@@ -41,17 +36,17 @@ True
 import base64
 import html
 import io
-import math
-import os
 import re
-import tempfile
-from dataclasses import dataclass
-from pathlib import Path, PurePosixPath
+from pathlib import Path, PurePath
 
 from components.common.errors import ConfigError
+from orchestrator.files.atomic import atomic_write_text
 
-__all__ = ["HtmlReport", "Section", "Column", "png_data_uri", "embedded_image_sources",
-           "link"]
+from .document import (Bullets, Code, Column, Document, Figure, Link, Paragraph, Preformatted,
+                       Section, Strong, Table, Verdict, cell, inline_parts)
+
+__all__ = ["HtmlReport", "Section", "Column", "embedded_image_sources", "link", "png_data_uri",
+           "render_html", "write_html"]
 
 _PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -76,35 +71,12 @@ pre { background: #f5f5f5; padding: .6rem; overflow-x: auto; }
 """
 
 
-@dataclass(frozen=True)
-class Column:
-    """A table column: name, unit (shown as ``name [unit]``) and number format.
-
-    Parameters
-    ----------
-    name : str
-    unit : str, optional
-        SI unit or "1" for a dimensionless number; None shows no brackets.
-    format : str, optional
-        :func:`format` spec for floats, e.g. ``".3f"``; default ``".4g"``.
-    """
-
-    name: str
-    unit: str = None
-    format: str = None
-
-    @property
-    def header(self):
-        """The header text, ``name [unit]`` or ``name``."""
-        return self.name if self.unit is None else f"{self.name} [{self.unit}]"
-
-
 class _Raw(str):
     """Markup built by this module (already escaped); never user text."""
 
 
 def link(text, relative_path):
-    """An ``<a>`` to a file beside the report, for use as a table cell or in ``bullets``.
+    """A link to a file beside the report, for a table cell, a list item or a paragraph.
 
     Parameters
     ----------
@@ -115,31 +87,14 @@ def link(text, relative_path):
 
     Returns
     -------
-    str
-        Markup that :class:`Section` inserts as is.
+    Link
 
     Raises
     ------
     ConfigError
         If the target is absolute, leaves the folder or has a URL scheme.
     """
-    target = str(relative_path).replace(os.sep, "/")
-    posix = PurePosixPath(target)
-    if (posix.is_absolute() or re.match(r"^[A-Za-z][A-Za-z0-9+.-]*:", target)
-            or ".." in posix.parts):
-        raise ConfigError(f"HTML report link {target!r}: must be a relative path inside the "
-                          "report's folder (no absolute path, no '..', no URL)")
-    return _Raw(f'<a href="{html.escape(target, quote=True)}">{html.escape(str(text))}</a>')
-
-
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _text(value):
-    return value if isinstance(value, _Raw) else html.escape(str(value))
+    return Link(str(text), relative_path)
 
 
 def png_data_uri(source, dpi=110):
@@ -192,94 +147,121 @@ def embedded_image_sources(page):
     return re.findall(r"<img\b[^>]*\bsrc=\"([^\"]*)\"", page)
 
 
+def _inline(content):
+    """Markup of inline content: text escaped, each inline kind its element."""
+    out = []
+    for part in inline_parts(content):
+        if isinstance(part, str):
+            out.append(html.escape(part))
+        elif isinstance(part, Code):
+            out.append(f"<code>{html.escape(part.text)}</code>")
+        elif isinstance(part, Strong):
+            out.append(f"<strong>{html.escape(part.text)}</strong>")
+        elif isinstance(part, Verdict):
+            out.append(f'<span class="{part.tone}">{html.escape(part.text)}</span>')
+        else:
+            out.append(f'<a href="{html.escape(part.target, quote=True)}">'
+                       f"{html.escape(part.text)}</a>")
+    return _Raw("".join(out))
+
+
 def _cell(value, column):
-    """``<td>`` of one value: numbers right-aligned, text left (see the module docstring)."""
-    if isinstance(value, _Raw):
-        return f"<td>{value}</td>"
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "<td class=\"num\">\u2014</td>"
-    if isinstance(value, bool):
-        return f"<td>{'yes' if value else 'no'}</td>"
-    if isinstance(value, float) or (hasattr(value, "dtype") and value.dtype.kind == "f"):
-        return f"<td class=\"num\">{html.escape(format(float(value), column.format or '.4g'))}</td>"
-    if isinstance(value, int):
-        text = format(value, column.format) if column.format else str(value)
-        return f"<td class=\"num\">{html.escape(text)}</td>"
-    return f"<td>{html.escape(str(value))}</td>"
+    """``<td>`` of one value: numbers right-aligned, a verdict in its tone, text left."""
+    content, number = cell(value, column)
+    if isinstance(content, Verdict):
+        return f'<td class="{content.tone}">{html.escape(content.text)}</td>'
+    attribute = ' class="num"' if number else ""
+    return f"<td{attribute}>{_inline(content)}</td>"
 
 
-class Section:
-    """A heading and its blocks; built through :meth:`HtmlReport.section`."""
-
-    def __init__(self, heading, level=2):
-        if level not in (2, 3, 4):
-            raise ConfigError(f"HTML report section {heading!r}: level = {level!r}, valid "
-                              "2, 3, 4")
-        self.heading = heading
-        self.level = level
-        self.blocks = []
-
-    def paragraph(self, text, css_class=None):
-        """Add a paragraph of escaped text (``css_class``: pass, fail or warn)."""
-        attribute = f' class="{html.escape(css_class)}"' if css_class else ""
-        self.blocks.append(f"<p{attribute}>{_text(text)}</p>")
-        return self
-
-    def bullets(self, items):
-        """Add an unordered list; each item is text or a :func:`link`."""
-        body = "".join(f"<li>{_text(item)}</li>" for item in items)
-        self.blocks.append(f"<ul>{body}</ul>")
-        return self
-
-    def preformatted(self, text):
-        """Add preformatted text (escaped)."""
-        self.blocks.append(f"<pre>{html.escape(str(text))}</pre>")
-        return self
-
-    def table(self, columns, rows, caption=None):
-        """Add a table.
-
-        Parameters
-        ----------
-        columns : sequence of Column or str
-            Headers; a string is a column without unit.
-        rows : iterable of sequences
-            One value per column (see the module docstring for how cells print).
-        caption : str, optional
-        """
-        columns = [c if isinstance(c, Column) else Column(str(c)) for c in columns]
-        parts = ["<table>"]
-        if caption:
-            parts.append(f"<caption>{html.escape(caption)}</caption>")
-        parts.append("<thead><tr>" + "".join(f"<th>{html.escape(c.header)}</th>"
-                                             for c in columns) + "</tr></thead><tbody>")
-        for index, row in enumerate(rows):
-            row = list(row)
-            if len(row) != len(columns):
-                raise ConfigError(f"HTML report table {caption or self.heading!r}: row {index} "
-                                  f"has {len(row)} cells for {len(columns)} columns")
-            parts.append("<tr>" + "".join(_cell(v, c) for v, c in zip(row, columns)) + "</tr>")
-        parts.append("</tbody></table>")
-        self.blocks.append("".join(parts))
-        return self
-
-    def figure(self, source, caption, alt=None, dpi=110):
-        """Add a figure embedded as a PNG data URI (see :func:`png_data_uri`)."""
-        uri = png_data_uri(source, dpi=dpi)
-        alt_text = html.escape(alt or caption, quote=True)
-        self.blocks.append(f'<figure><img src="{uri}" alt="{alt_text}">'
-                           f"<figcaption>{html.escape(caption)}</figcaption></figure>")
-        return self
-
-    def render(self):
-        """The section's markup."""
-        tag = f"h{self.level}"
-        return f"<section><{tag}>{html.escape(self.heading)}</{tag}>" + "".join(
-            self.blocks) + "</section>"
+def _table(table):
+    parts = ["<table>"]
+    if table.caption:
+        parts.append(f"<caption>{html.escape(table.caption)}</caption>")
+    parts.append("<thead><tr>" + "".join(f"<th>{html.escape(c.header)}</th>"
+                                         for c in table.columns) + "</tr></thead><tbody>")
+    for row in table.rows:
+        parts.append("<tr>" + "".join(_cell(v, c) for v, c in zip(row, table.columns))
+                     + "</tr>")
+    parts.append("</tbody></table>")
+    return "".join(parts)
 
 
-class HtmlReport:
-    """A self-contained HTML page: title, intro and sections (see the module docstring).
+def _figure(figure, base_dir):
+    source = figure.source
+    if isinstance(source, (str, PurePath)) and base_dir is not None \
+            and not Path(source).is_absolute():
+        source = Path(base_dir) / source
+    uri = png_data_uri(source, dpi=figure.dpi)
+    alt_text = html.escape(figure.alt or figure.caption, quote=True)
+    return (f'<figure><img src="{uri}" alt="{alt_text}">'
+            f"<figcaption>{html.escape(figure.caption)}</figcaption></figure>")
+
+
+def _block(block, base_dir):
+    if isinstance(block, Paragraph):
+        attribute = f' class="{block.tone}"' if block.tone else ""
+        return f"<p{attribute}>{_inline(block.content)}</p>"
+    if isinstance(block, Bullets):
+        return "<ul>" + "".join(f"<li>{_inline(item)}</li>" for item in block.items) + "</ul>"
+    if isinstance(block, Preformatted):
+        return f"<pre>{html.escape(block.text)}</pre>"
+    if isinstance(block, Table):
+        return _table(block)
+    if isinstance(block, Figure):
+        return _figure(block, base_dir)
+    raise ConfigError(f"HTML report: unknown block {block!r}")
+
+
+def _section(section, base_dir):
+    tag = f"h{section.level}"
+    return (f"<section><{tag}>{html.escape(section.heading)}</{tag}>"
+            + "".join(_block(b, base_dir) for b in section.blocks) + "</section>")
+
+
+def render_html(document, base_dir=None):
+    """The whole page of ``document`` as a string.
+
+    Parameters
+    ----------
+    document : Document
+    base_dir : path-like, optional
+        Folder that figures given as relative paths are read from (default: the working
+        folder).
+
+    Returns
+    -------
+    str
+    """
+    intro = f"<p>{_inline(document.intro)}</p>" if document.intro else ""
+    body = "".join(_section(section, base_dir) for section in document.sections)
+    title = html.escape(document.title)
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<title>{title}</title><style>{_STYLE}</style></head>"
+            f"<body><h1>{title}</h1>{intro}{body}</body></html>\n")
+
+
+def write_html(document, path):
+    """Write the page (UTF-8) atomically: a reader never sees a half-written file.
+
+    Parameters
+    ----------
+    document : Document
+    path : str or Path
+        The page; its folder is created, and figures given as relative paths are read from it.
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, render_html(document, base_dir=path.parent), fsync=False)
+    return path
+
+
+class HtmlReport(Document):
+    """A :class:`Document` rendered only to HTML (see the module docstring).
 
     Parameters
     ----------
@@ -288,45 +270,10 @@ class HtmlReport:
         A lead paragraph under the title.
     """
 
-    def __init__(self, title, intro=None):
-        self.title = title
-        self.intro = intro
-        self.sections = []
-
-    def section(self, heading, level=2):
-        """Append and return a new :class:`Section`."""
-        section = Section(heading, level)
-        self.sections.append(section)
-        return section
-
     def render(self):
-        """The whole page as a string."""
-        intro = f"<p>{_text(self.intro)}</p>" if self.intro else ""
-        body = "".join(section.render() for section in self.sections)
-        return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-                f"<title>{html.escape(self.title)}</title><style>{_STYLE}</style></head>"
-                f"<body><h1>{html.escape(self.title)}</h1>{intro}{body}</body></html>\n")
+        """The whole page as a string (relative figure paths read from the working folder)."""
+        return render_html(self)
 
     def write(self, path):
-        """Write the page (UTF-8) atomically: a reader never sees a half-written file.
-
-        Parameters
-        ----------
-        path : str or Path
-
-        Returns
-        -------
-        Path
-        """
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, temporary = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as stream:
-                stream.write(self.render())
-            os.chmod(temporary, 0o666 & ~_umask())  # mkstemp's 0600 would hide it from others
-            os.replace(temporary, path)
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
-        return path
+        """Write the page atomically (see :func:`write_html`); returns the path."""
+        return write_html(self, path)

@@ -16,8 +16,10 @@ so that a kill at any instant never leaves an older summary beside newer results
 3. ``summary.json`` is written with status ``running``.
 
 Every file but the streamed ``results.csv`` is written whole to a temporary name in the same
-folder, flushed (and fsync'ed) and renamed over its target (:func:`atomic_write_bytes`), so a
-reader sees either the old content or the new one, never a truncated file.
+folder, flushed (and fsync'ed) and renamed over its target (:func:`atomic_write_bytes`, from
+:mod:`orchestrator.files.atomic`, re-exported here), so a reader sees either the old content or
+the new one, never a truncated file. ``summary.json`` follows the JSON policy of
+:mod:`orchestrator.files.json_policy` (a non-finite number is written as ``null``).
 """
 
 import contextlib
@@ -26,6 +28,8 @@ import os
 from pathlib import Path
 
 from components.common.errors import ConfigError
+from orchestrator.files.atomic import (TEMPORARY_PREFIX, TEMPORARY_SUFFIX, atomic_write_bytes,
+                                       atomic_write_json, atomic_write_text)
 
 __all__ = [
     "RESULTS_NAME",
@@ -41,70 +45,13 @@ __all__ = [
 SUMMARY_NAME = "summary.json"
 RESULTS_NAME = "results.csv"
 STATUSES = ("running", "ok", "failed", "interrupted")
-# Temporary files are hidden and carry the writer's pid, so two writers never share one.
-_TEMP_PREFIX = "."
-_TEMP_SUFFIX = ".partial"
+# Temporary files are named by the one atomic writer (orchestrator.files.atomic).
+_TEMP_PREFIX = TEMPORARY_PREFIX
+_TEMP_SUFFIX = TEMPORARY_SUFFIX
 
 
 def _temporary_name(path):
     return path.with_name(f"{_TEMP_PREFIX}{path.name}.{os.getpid()}{_TEMP_SUFFIX}")
-
-
-def _fsync_directory(directory):
-    """Make a rename in ``directory`` durable (where the platform allows opening a folder)."""
-    try:
-        descriptor = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(descriptor)
-    except OSError:
-        pass
-    finally:
-        os.close(descriptor)
-
-
-def atomic_write_bytes(path, data, fsync=True):
-    """Write ``data`` to ``path`` so that readers see the old file or the new one, never half.
-
-    The bytes go to a temporary file in the same folder, which is flushed, fsync'ed and renamed
-    over ``path`` with :func:`os.replace` (atomic on POSIX and Windows within one file system).
-
-    Parameters
-    ----------
-    path : path-like
-        The target file; its folder must exist.
-    data : bytes
-        The whole new content.
-    fsync : bool
-        Also fsync the file and its folder, so the new content survives a power cut, not only
-        a killed process.
-    """
-    path = Path(path)
-    temporary = _temporary_name(path)
-    try:
-        with open(temporary, "wb") as stream:
-            stream.write(data)
-            stream.flush()
-            if fsync:
-                os.fsync(stream.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            temporary.unlink()
-        raise
-    if fsync:
-        _fsync_directory(path.parent)
-
-
-def atomic_write_text(path, text, fsync=True):
-    """Write ``text`` (UTF-8) atomically; see :func:`atomic_write_bytes`."""
-    atomic_write_bytes(path, text.encode("utf-8"), fsync=fsync)
-
-
-def atomic_write_json(path, data, fsync=True):
-    """Write ``data`` as indented JSON atomically; see :func:`atomic_write_bytes`."""
-    atomic_write_text(path, json.dumps(data, indent=2) + "\n", fsync=fsync)
 
 
 def read_summary(run_dir):

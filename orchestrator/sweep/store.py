@@ -13,9 +13,9 @@ table or the new one, never half of one.
 import csv
 import io
 import json
-import os
-import tempfile
 from pathlib import Path
+
+from orchestrator.files.atomic import atomic_write_text
 
 __all__ = ["finished_summary", "read_summary", "table_columns", "write_atomic", "write_table"]
 
@@ -42,19 +42,10 @@ def finished_summary(run_dir):
 
 
 def write_atomic(path, text):
-    """Write ``text`` to ``path`` through a temporary file and a rename."""
+    """Write ``text`` to ``path`` (folder created) with the one atomic writer, fsync'ed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
-            stream.write(text)
-            stream.flush()
-            os.fsync(stream.fileno())
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    atomic_write_text(path, text)
 
 
 def table_columns(rows, settings=()):

@@ -5,8 +5,8 @@ Routh), :mod:`.robustness` (other plants, the largest stable plant-gain factor),
 :mod:`.case1` (the paper's Case 1 on the nonlinear plant core), :mod:`.measure` (the figures
 of a run), :mod:`.fmu_runs` (the built FMUs against the models), :mod:`.checks`
 (requirements and verdicts) and :mod:`.robust_checks` (those on other plants),
-:mod:`.figures`, :mod:`.markdown`, :mod:`.html_page`, :mod:`.report`
-(:func:`verify`) and :mod:`.cli`.
+:mod:`.figures`, :mod:`.document` (the report as one document, rendered to Markdown and
+HTML by :mod:`orchestrator.report`), :mod:`.report` (:func:`verify`) and :mod:`.cli`.
 """
 
 from .analysis import (

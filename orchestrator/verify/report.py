@@ -7,18 +7,19 @@ three reports. Its :class:`VerificationReport` carries the checks; :meth:`exit_s
 number of failed checks (the CLI's exit status).
 """
 
-import json
 import math
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-import numpy as np
-
 from components.common.errors import ConfigError
 from components.control.controller import DEFAULTS as CONTROLLER_DEFAULTS
 from components.plant.motor import steady_wheel_speed
 from components.plant.parameters import PlantParameters
+from orchestrator.files.atomic import atomic_write_text
+from orchestrator.files.json_policy import dumps
+from orchestrator.report.html import write_html
+from orchestrator.report.markdown import write_markdown
 
 from . import checks as C
 from . import robust_checks as R
@@ -69,10 +70,10 @@ class VerificationReport:
                 "strict": bool(strict), "exit_status": self.exit_status(strict)}
 
     def to_json(self, strict=False, indent=1):
-        """``{"summary", "checks", "figures"}`` as JSON (NaN and inf written as strings)."""
-        return json.dumps(_json_safe({"summary": self.summary(strict),
-                                      "checks": [c.to_dict() for c in self.checks],
-                                      "figures": self.figures}), indent=indent)
+        """``{"summary", "checks", "figures"}`` as JSON (NaN and inf written as null)."""
+        return dumps({"summary": self.summary(strict),
+                      "checks": [c.to_dict() for c in self.checks],
+                      "figures": self.figures}, indent=indent)
 
     def summary_lines(self):
         """One console line per check, then the counts."""
@@ -81,20 +82,6 @@ class VerificationReport:
         lines.append(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warning(s) "
                      f"of {s['checks']} checks")
         return lines
-
-
-def _json_safe(value):
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, (np.floating, np.integer)):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return str(value)
-    return value
 
 
 def model_statement(model, settings):
@@ -322,13 +309,11 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
 
 
 def _write_reports(report, model, out_dir, strict):
-    from .html_page import html_report
-    from .markdown import markdown_report
+    from .document import verification_document
 
-    json_path = out_dir / "verification.json"
-    json_path.write_text(report.to_json(strict))
-    report.paths["json"] = json_path
-    md_path = out_dir / "verification.md"
-    md_path.write_text(markdown_report(report, strict))
-    report.paths["markdown"] = md_path
-    report.paths["html"] = html_report(report, model, strict).write(out_dir / "verification.html")
+    report.paths["json"] = out_dir / "verification.json"
+    atomic_write_text(report.paths["json"], report.to_json(strict), fsync=False)
+    document = verification_document(report, model, strict)
+    report.paths["markdown"] = write_markdown(document, out_dir / "verification.md",
+                                              html_companion="verification.html")
+    report.paths["html"] = write_html(document, out_dir / "verification.html")

@@ -11,16 +11,15 @@ pythonfmu's. docs/fmi_binary.md describes the binary's contract.
 """
 
 import hashlib
-import os
 import re
 import sys
 import sysconfig
-import tempfile
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
 from components.common.errors import BuildError
+from orchestrator.files.atomic import atomic_open
 
 __all__ = ["LIBRARY", "SOURCES", "BINDING_FILE", "build_tag", "source_hash", "library_source_hash",
            "install_binary", "binding_table", "pythonfmu_binary", "restore_pythonfmu_binary"]
@@ -186,20 +185,14 @@ def _rewrite(fmu_path, replaced):
     """Rewrite the zip with ``replaced`` entries (None: removed), atomically."""
     with zipfile.ZipFile(fmu_path) as archive:
         entries = [(info, archive.read(info)) for info in archive.infolist()]
-    handle, temporary = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
-    os.close(handle)
-    try:
-        with zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED) as archive:
-            for info, data in entries:
-                if info.filename not in replaced:
-                    archive.writestr(info, data)
-            for name, data in replaced.items():
-                if data is not None:
-                    archive.writestr(name, data)
-        os.replace(temporary, fmu_path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    with (atomic_open(fmu_path, fsync=False) as stream,
+          zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as archive):
+        for info, data in entries:
+            if info.filename not in replaced:
+                archive.writestr(info, data)
+        for name, data in replaced.items():
+            if data is not None:
+                archive.writestr(name, data)
 
 
 def pythonfmu_binary():

@@ -1,6 +1,7 @@
 """The shared HTML report writer: escaping, tables with units, embedded figures, a real browser."""
 
 import base64
+import html
 import os
 import re
 import struct
@@ -9,8 +10,9 @@ import zlib
 import pytest
 
 from components.common.errors import ConfigError
+from orchestrator.report.document import Code, Document, Link, Strong, Verdict
 from orchestrator.report.html import (
-    Column, HtmlReport, embedded_image_sources, link, png_data_uri,
+    Column, HtmlReport, embedded_image_sources, link, png_data_uri, write_html,
 )
 from tests.support.html_render import ChromiumUnavailable, chromium_path, render_image_count
 
@@ -121,3 +123,28 @@ def test_report_renders_in_headless_chromium_with_every_figure_loaded(tmp_path):
     assert (loaded, total) == (3, 3)
     # The check can fail: a truncated PNG is counted as not loaded.
     assert render_image_count(_broken_page(tmp_path)) == (1, 2)
+
+
+def test_user_text_is_escaped_in_every_place_of_a_document(tmp_path):
+    """A ``<script>`` in any text of a document is shown, never run: no tag reaches the page."""
+    attack = "<script>alert('x')</script>"
+    (tmp_path / "figures").mkdir()
+    (tmp_path / "figures" / "f.png").write_bytes(_png(2, 2))
+    document = Document(attack, intro=[attack, Code(attack)])
+    section = document.section(attack, level=3)
+    section.paragraph([attack, Strong(attack), Verdict(attack, "fail")], tone="fail")
+    section.bullets([attack, Link(attack, "sub/a b.json")])
+    section.preformatted(attack)
+    section.table([Column(attack, attack)], [[attack], [Code(attack)], [Verdict(attack, "warn")]],
+                  caption=attack)
+    section.figure("figures/f.png", attack, alt=attack)
+    path = write_html(document, tmp_path / "report.html")
+    page = path.read_text(encoding="utf-8")
+    assert "<script" not in page
+    escaped = html.escape(attack)
+    # title and h1, intro twice, heading, paragraph three times, list item and link text, pre,
+    # header (name and unit), caption, three cells, figure caption and alt
+    assert page.count(escaped) == 19
+    assert '<a href="sub/a b.json">' in page and '<td class="warn">' in page
+    # the figure was read relative to the page's folder and embedded
+    assert embedded_image_sources(page) == [png_data_uri(_png(2, 2))]

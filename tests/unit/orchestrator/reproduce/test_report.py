@@ -8,6 +8,8 @@ from components.common.errors import ConfigError
 from orchestrator.reproduce import (PAPER_SPEEDS, TABLES, check_selection, configuration,
                                     formula_profiles, load_paper_tables, mean_interval, plan,
                                     tracking_bounds)
+from orchestrator.report.document import Document
+from orchestrator.report.markdown import render_markdown
 from orchestrator.reproduce.report import Table
 
 
@@ -55,7 +57,9 @@ def test_report_table_prints_estimates_beside_the_paper():
                              ("d_paper", "paper", ".3f")],
                   rows=[{"v": 0.1, "d": mean_interval([1.9, 2.0, 2.1]), "d_paper": 2.05},
                         {"v": 0.2, "d": mean_interval([None, None]), "d_paper": 2.3}])
-    text = table.to_markdown()
+    document = Document("report")
+    table.add_to(document.section(table.title))
+    text = render_markdown(document)
     assert "| v | d [m] sim | paper |" in text
     # mean 2.0, s = 0.1, t(0.975, 2) = 4.3027: half width 0.248
     assert "| 0.1 | 2.000 [1.752, 2.248] | 2.050 |" in text
