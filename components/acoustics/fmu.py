@@ -3,34 +3,8 @@
 from ..common.errors import InputError
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .localizer import LocalizerCore
-from .settings import DEFAULTS
 
 __all__ = ["AcousticLocalizer"]
-
-_REAL_PARAMETERS = (
-    ("mic_spacing", "m", "distance l between adjacent microphones"),
-    ("sample_rate", "Hz", "ADC sampling rate"),
-    ("snr_db", "dB", "burst power over full-band noise variance at 1 m from the source"),
-    ("speed_of_sound", "m/s", "speed of sound c"),
-    ("window", "s", "correlation window from a pair's first onset (paper: 2500 us)"),
-    ("fix_period", "s", "time between fixes (the paper's 100 ms data cycle)"),
-    ("band_low", "Hz", "start frequency of the source's chirp burst"),
-    ("band_high", "Hz", "end frequency of the source's chirp burst"),
-    ("burst_duration", "s", "length of the chirp burst"),
-    ("array_offset", "m", "array centre ahead of the robot reference point along the heading"),
-    ("min_range", "m", "closer sources give no fix"),
-    ("max_range", "m", "farther sources (true or estimated) give no fix"),
-    ("min_peak_quality", "1", "smallest in-band correlation coefficient accepted"),
-    ("onset_threshold_db", "dB", "matched-filter peak over its median needed to detect a burst"),
-)
-_INTEGER_PARAMETERS = (
-    ("adc_bits", "ADC resolution in bits over the full scale [-1, 1)"),
-    ("seed", "seed of the microphone noise; same seed, same result"),
-)
-_STRING_PARAMETERS = (
-    ("method", "range/bearing estimator: exact (near-field), paper (Eq. 4 + Eq. 5), far_field"),
-    ("weighting", "cross-correlation weighting over the source band: band or phat"),
-)
 
 
 class AcousticLocalizer(SonotrackSlave):
@@ -49,28 +23,10 @@ class AcousticLocalizer(SonotrackSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.source_x = 0.0
-        self.source_y = 2.0
-        self.emitting = False
-        self.robot_x = 0.0
-        self.robot_y = 0.0
-        self.robot_heading = 1.5707963267948966
-        for name, _, _ in _REAL_PARAMETERS:
-            setattr(self, name, float(DEFAULTS[name]))
-        for name, _ in _INTEGER_PARAMETERS:
-            setattr(self, name, int(DEFAULTS[name]))
-        for name, _ in _STRING_PARAMETERS:
-            setattr(self, name, str(DEFAULTS[name]))
-        self.fault_schedule = ""
         self.core = LocalizerCore()
         self._copy_outputs()  # the core's "no fix yet" values
 
-        self.input_real("source_x", "m", "true source position x (world frame)")
-        self.input_real("source_y", "m", "true source position y (world frame)")
-        self.input_boolean("emitting", "the source sounds its burst")
-        self.input_real("robot_x", "m", "robot reference point x (world frame)")
-        self.input_real("robot_y", "m", "robot reference point y (world frame)")
-        self.input_real("robot_heading", "rad", "robot heading, counter-clockwise from +x")
+        self.declare_inputs()
         self.output_real("distance", "m", "range of the last valid fix from the robot reference "
                          "point (the array centre when array_offset = 0)")
         self.output_real("bearing", "rad", "bearing of the last valid fix, relative to the "
@@ -91,21 +47,10 @@ class AcousticLocalizer(SonotrackSlave):
                             "attempt")
         self.output_real("true_distance", "m", "true range at the latest attempt (for plots)")
         self.output_real("true_bearing", "rad", "true bearing at the latest attempt (for plots)")
-        for name, unit, text in _REAL_PARAMETERS:
-            self.parameter_real(name, unit, text)
-        for name, text in _INTEGER_PARAMETERS:
-            self.parameter_integer(name, text)
-        for name, text in _STRING_PARAMETERS:
-            self.parameter_string(name, text)
-        self.parameter_string("fault_schedule", "faults this FMU applies: a JSON list of "
-                              "{kind, start, end, magnitude, channel} (docs/faults.md); "
-                              "empty: none")
+        self.declare_parameters()
 
     def exit_initialization_mode(self):
-        parameters = {name: float(getattr(self, name)) for name, _, _ in _REAL_PARAMETERS}
-        parameters.update({name: int(getattr(self, name)) for name, _ in _INTEGER_PARAMETERS})
-        parameters.update({name: str(getattr(self, name)) for name, _ in _STRING_PARAMETERS})
-        self.core = LocalizerCore(fault_schedule=str(self.fault_schedule), **parameters)
+        self.core = LocalizerCore(**self.parameter_values())
 
     def do_step(self, current_time, step_size):
         if self.inputs_refused() or self.step_refused(step_size):

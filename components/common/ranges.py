@@ -1,23 +1,37 @@
-"""Valid ranges of an FMU's parameters, inputs and communication step, read from data.
+"""The port table of an FMU: its parameters and inputs, their valid ranges, read from data.
 
-Each FMU's sub-package holds one ``ranges.toml``: for every parameter and input its FMI type,
-unit and inclusive ``min``/``max`` (Real, Integer), or its ``choices`` (String); plus the
-communication step's range. The same table is used three times, so it is the one source of
-truth: the slave refuses values outside it (:class:`~components.common.slave.SonotrackSlave`),
-the modelDescription carries it as ``min``/``max`` attributes, and the scenario schema checks
-a run's parameter values against it before any FMU is loaded (``orchestrator.scenario``).
+Each FMU's sub-package holds one ``ranges.toml``. For every parameter and input it gives the
+``description``, the FMI ``type``, the ``unit`` (Real), the ``start`` value, the inclusive
+``min``/``max`` (Real, Integer) or the ``choices`` (String), and optionally ``why`` the bounds
+are what they are; plus the communication step's range::
+
+    [parameters.mic_spacing]
+    description = "distance l between adjacent microphones"
+    type = "Real"
+    unit = "m"
+    start = 0.4
+    min = 0.01
+    max = 5.0
+    why = "paper: 0.4"
+
+Entries are in declaration order, which fixes the FMU's value references. The same table is
+used four times, so it is the one source of truth: the slave declares its parameters and inputs
+from it (:class:`~components.common.slave.SonotrackSlave`), refuses values outside it, the
+modelDescription carries it as ``min``/``max`` attributes, and the scenario schema checks a
+run's parameter values against it before any FMU is loaded (``orchestrator.scenario``).
 
 Values are checked strictly: no clamping and no coercion. A Real takes an int or a float (never
 a bool), an Integer only an int, a Boolean only a bool, a String only a str; NaN and inf are
 outside every range.
 """
 
+import dataclasses
 import math
 import tomllib
-from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ConfigError
+from .units import UNIT_BASES
 
 __all__ = ["ValidRange", "RangeTable", "load_ranges", "show", "TYPES", "INT32_MIN", "INT32_MAX"]
 
@@ -29,7 +43,7 @@ def _number_text(value):
     return repr(value) if isinstance(value, float) else str(value)
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class ValidRange:
     """The valid values of one parameter, input or the communication step.
 
@@ -49,6 +63,10 @@ class ValidRange:
         A String may also be a file name with this suffix (e.g. a CSV path).
     why : str
         Where the bounds come from (shown in the FMU documentation).
+    start : float or int or bool or str or None
+        Start value of a parameter or input, of its type (None for the communication step).
+    description : str
+        What the port is, as the modelDescription says it.
     """
 
     name: str
@@ -59,6 +77,8 @@ class ValidRange:
     choices: tuple = ()
     file_suffix: str | None = None
     why: str = ""
+    start: float | int | bool | str | None = None
+    description: str = ""
 
     def text(self):
         """The valid values in words: ``[0.1, 1000.0] kg``, ``one of 'a', 'b'``, ``true or false``."""
@@ -115,9 +135,9 @@ def _kind_of(value):
             dict: "a table", list: "a list"}.get(type(value), type(value).__name__)
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class RangeTable:
-    """Every valid range of one FMU: ``parameters`` and ``inputs`` by name, and ``step``."""
+    """One FMU's port table: ``parameters``, ``inputs`` (by name, declaration order), ``step``."""
 
     model: str
     parameters: dict
@@ -130,39 +150,73 @@ class RangeTable:
         return self.parameters.get(name) or self.inputs.get(name)
 
 
-def _read_entry(name, spec, where):
+_STEP_KEYS = ("type", "unit", "min", "max", "choices", "file_suffix", "why")
+_PORT_KEYS = ("description", "type", "unit", "start", "min", "max", "choices", "file_suffix", "why")
+_START_TYPES = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
+
+
+def _read_entry(port, name, spec, where, problems):
+    """Return the :class:`ValidRange` of one table entry, or None after adding its problems.
+
+    ``port`` is ``"parameter"`` or ``"input"``, whose entries also need a ``description`` and
+    a ``start``, or None for the communication step.
+    """
+    def refuse(text):
+        problems.append(f"{where}: {port + ' ' if port else ''}{name}: {text}")
+
     if not isinstance(spec, dict):
-        raise ConfigError(f"{where}: {name} must be an inline table, got {spec!r}")
-    unknown = set(spec) - {"type", "unit", "min", "max", "choices", "file_suffix", "why"}
+        refuse(f"must be a table, got {spec!r}")
+        return None
+    keys = _PORT_KEYS if port else _STEP_KEYS
+    unknown = sorted(set(spec) - set(keys))
     if unknown:
-        raise ConfigError(f"{where}: {name} has unknown keys {sorted(unknown)}")
+        refuse(f"unknown keys {unknown}; valid keys: {', '.join(keys)}")
     kind = spec.get("type")
     if kind not in TYPES:
-        raise ConfigError(f"{where}: {name}: type {kind!r} is not one of {', '.join(TYPES)}")
+        refuse(f"type {kind!r} is not one of {', '.join(TYPES)}")
+        return None
+    count = len(problems)
     minimum, maximum = spec.get("min"), spec.get("max")
     if kind in ("Real", "Integer"):
         number = int if kind == "Integer" else (int, float)
-        for bound in (minimum, maximum):
-            if not isinstance(bound, number) or isinstance(bound, bool) or \
-                    not math.isfinite(bound):
-                raise ConfigError(f"{where}: {name} needs finite min and max of its type, got "
-                                  f"min = {minimum!r}, max = {maximum!r}")
-        if minimum > maximum:
-            raise ConfigError(f"{where}: {name}: min {minimum!r} > max {maximum!r}")
-        if kind == "Integer" and not INT32_MIN <= minimum <= maximum <= INT32_MAX:
-            raise ConfigError(f"{where}: {name}: an fmi2Integer range must lie in "
-                              f"[{INT32_MIN}, {INT32_MAX}]")
-        if kind == "Real":
+        if not all(isinstance(b, number) and not isinstance(b, bool) and math.isfinite(b)
+                   for b in (minimum, maximum)):
+            refuse(f"needs finite min and max of its type, got min = {minimum!r}, "
+                   f"max = {maximum!r}")
+        elif minimum > maximum:
+            refuse(f"min {minimum!r} > max {maximum!r}")
+        elif kind == "Integer" and not INT32_MIN <= minimum <= maximum <= INT32_MAX:
+            refuse(f"an fmi2Integer range must lie in [{INT32_MIN}, {INT32_MAX}]")
+        elif kind == "Real":
             minimum, maximum = float(minimum), float(maximum)
     elif minimum is not None or maximum is not None:
-        raise ConfigError(f"{where}: {name}: min/max apply to Real and Integer only")
-    if kind == "Real" and not spec.get("unit"):
-        raise ConfigError(f"{where}: {name}: a Real needs its unit")
+        refuse("min/max apply to Real and Integer only")
+    unit = spec.get("unit")
+    if kind == "Real" and unit not in UNIT_BASES:
+        refuse(("a Real needs its unit" if unit is None else f"unit {unit!r} is not known")
+               + f", one of {', '.join(UNIT_BASES)}")
+    elif kind != "Real" and unit is not None:
+        refuse("a unit applies to a Real only")
     choices = tuple(spec.get("choices", ()))
     if (choices or spec.get("file_suffix")) and kind != "String":
-        raise ConfigError(f"{where}: {name}: choices/file_suffix apply to String only")
-    return ValidRange(name, kind, spec.get("unit"), minimum, maximum, choices,
-                      spec.get("file_suffix"), spec.get("why", ""))
+        refuse("choices/file_suffix apply to String only")
+    description, start = spec.get("description", ""), spec.get("start")
+    if port and (not isinstance(description, str) or not description.strip()):
+        refuse("needs a description, a non-empty string (the modelDescription's)")
+    if port and start is None:
+        refuse(f"needs a start value of type {kind}")
+    if len(problems) > count:
+        return None
+    entry = ValidRange(name, kind, unit, minimum, maximum, choices, spec.get("file_suffix"),
+                       spec.get("why", ""), description=description)
+    if port:
+        problem = entry.problem(start)
+        if problem is not None:
+            problems.append(f"{where}: start value of {port} {problem}")
+            return None
+        # a Real start may be written as an integer (start = 0); the port holds a float
+        entry = dataclasses.replace(entry, start=_START_TYPES[kind](start))
+    return entry
 
 
 def load_ranges(part):
@@ -181,7 +235,8 @@ def load_ranges(part):
     Raises
     ------
     ConfigError
-        If the table is missing or malformed.
+        If the table is missing or malformed: every problem, one line each, naming the file,
+        the entry and the valid choices.
     """
     path = Path(__file__).resolve().parent.parent / part / "ranges.toml"
     where = str(path)
@@ -189,15 +244,24 @@ def load_ranges(part):
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise ConfigError(f"{where}: cannot read the valid-range table ({error})") from error
+    problems = []
     tables = {}
-    for section in ("parameters", "inputs"):
+    for section, port in (("parameters", "parameter"), ("inputs", "input")):
         entries = data.get(section, {})
-        tables[section] = {name: _read_entry(name, spec, where) for name, spec in entries.items()}
+        if not isinstance(entries, dict):
+            problems.append(f"{where}: [{section}] must be a table of {section}")
+            entries = {}
+        tables[section] = {name: _read_entry(port, name, spec, where, problems)
+                           for name, spec in entries.items()}
     step = data.get("step", {}).get("step_size")
     if step is None:
-        raise ConfigError(f"{where}: [step] step_size (the communication step range) is missing")
-    step_range = _read_entry("step_size", step, where)
-    if step_range.type != "Real" or step_range.minimum <= 0.0:
-        raise ConfigError(f"{where}: step_size must be a Real with min > 0")
+        problems.append(f"{where}: [step] step_size (the communication step range) is missing")
+        step_range = None
+    else:
+        step_range = _read_entry(None, "step_size", step, where, problems)
+        if step_range is not None and (step_range.type != "Real" or step_range.minimum <= 0.0):
+            problems.append(f"{where}: step_size must be a Real with min > 0")
+    if problems:
+        raise ConfigError("\n".join(problems))
     return RangeTable(data.get("model", part), tables["parameters"], tables["inputs"],
                       step_range, where)

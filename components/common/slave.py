@@ -2,9 +2,11 @@
 
 pythonfmu 0.7.0 declares no units, no InitialUnknowns, gives Integer and Boolean variables an
 illegal continuous variability and saves only registered variables in the FMU state. This
-module closes those gaps once for every FMU: slaves declare ports with a unit, a description
-and their direct dependencies through :class:`SonotrackSlave`, whose :meth:`to_xml` writes a
-compliant modelDescription.xml, and whose state hooks save the model core in full.
+module closes those gaps once for every FMU: slaves declare their parameters and inputs from
+the part's port table (``ranges.toml``, :mod:`.ranges`) and their outputs with a unit, a
+description and their direct dependencies through :class:`SonotrackSlave`, whose
+:meth:`to_xml` writes a compliant modelDescription.xml, and whose state hooks save the model
+core in full.
 """
 
 import functools
@@ -18,59 +20,30 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Initial, Fmi2Status, Fmi2Variabil
 from .errors import InputError, ParameterError, SonotrackError
 from .ranges import load_ranges
 from .state import restore, snapshot
+from .units import UNIT_BASES
 
 __all__ = ["SonotrackSlave", "DefaultExperiment", "Fmi2Status", "UNIT_BASES", "load_ranges"]
 
-# SI base-unit exponents of every unit a sonotrack port may carry (FMI 2.0 BaseUnit attributes).
-UNIT_BASES = {
-    "1": {},
-    "m": {"m": 1},
-    "m2": {"m": 2},
-    "s": {"s": 1},
-    "Hz": {"s": -1},
-    "m/s": {"m": 1, "s": -1},
-    "m/s2": {"m": 1, "s": -2},
-    "1/m": {"m": -1},
-    "rad": {"rad": 1},
-    "rad/s": {"rad": 1, "s": -1},
-    "kg": {"kg": 1},
-    "kg.m2": {"kg": 1, "m": 2},
-    "N": {"kg": 1, "m": 1, "s": -2},
-    "N.m": {"kg": 1, "m": 2, "s": -2},
-    "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
-    "A": {"A": 1},
-    "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
-    "H": {"kg": 1, "m": 2, "s": -2, "A": -2},
-    "N.m/A": {"kg": 1, "m": 2, "s": -2, "A": -1},
-    "V.s/rad": {"kg": 1, "m": 2, "s": -2, "A": -1, "rad": -1},
-    "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
-    "1/V": {"kg": -1, "m": -2, "s": 3, "A": 1},
-    "1/(m/s)": {"m": -1, "s": 1},
-    "1/(m/s2)": {"m": -1, "s": 2},
-    "V/(m/s)": {"kg": 1, "m": 1, "s": -2, "A": -1},
-    "V.s/m": {"kg": 1, "m": 1, "s": -2, "A": -1},
-    "V.s2/m": {"kg": 1, "m": 1, "s": -1, "A": -1},
-    "V/m": {"kg": 1, "m": 1, "s": -3, "A": -1},
-    "dB": {},
-    "deg": {"rad": 1},
-}
-
-_KIND = {Real: "Real", Integer: "Integer", Boolean: "Boolean", String: "String"}
+_VARIABLE = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
+_VALUE = {"Real": float, "Integer": int, "Boolean": bool, "String": str}
 
 
 class SonotrackSlave(Fmi2Slave):
     """Base of every sonotrack slave: typed, unit-annotated ports, valid ranges, complete state.
 
-    A slave sets each port's attribute, declares it with one of the ``input_*``, ``output_*``
-    or ``parameter_*`` methods, builds its core in :meth:`exit_initialization_mode` and calls
-    it in ``do_step``. Attributes named in ``hidden_state`` (default: ``core``) are saved and
-    restored with the FMU state, in full.
+    A slave declares its inputs and parameters from its port table with
+    :meth:`declare_inputs` and :meth:`declare_parameters` (which set each to its start value),
+    sets and declares its outputs with the ``output_*`` methods, builds its core from
+    :meth:`parameter_values` in :meth:`exit_initialization_mode` and calls it in ``do_step``.
+    Attributes named in ``hidden_state`` (default: ``core``) are saved and restored with the
+    FMU state, in full.
 
     ``valid_ranges`` (a :class:`~components.common.ranges.RangeTable`, read from the part's
-    ``ranges.toml``) must hold every parameter and input: a port without a range cannot be
-    declared. :meth:`check_parameters` refuses parameters outside it (raising
+    ``ranges.toml``) holds every parameter and input: its description, type, unit, start value
+    and valid range. :meth:`check_parameters` refuses parameters outside it (raising
     :class:`ParameterError`), :meth:`inputs_refused` and :meth:`step_refused` refuse inputs
-    and steps (``do_step`` then returns False), and :meth:`to_xml` writes it as ``min``/``max``.
+    and steps (``do_step`` then returns False), and :meth:`to_xml` writes it as ``min``/``max``
+    (and refuses a table entry the slave did not declare).
 
     Error contract with sonotrack's FMU binary (docs/fmi_binary.md): ``exit_initialization_mode``
     raises the project's exceptions (:class:`ParameterError` for a refused parameter, the
@@ -116,10 +89,6 @@ class SonotrackSlave(Fmi2Slave):
             if unit not in UNIT_BASES:
                 raise ValueError(f"port {name!r}: unit {unit!r} is not one of {sorted(UNIT_BASES)}")
             self._units[name] = unit
-        if causality in (Fmi2Causality.parameter, Fmi2Causality.input):
-            entry = self._declared_range(kind, name, unit)
-            if causality == Fmi2Causality.input and kind in (Real, Integer):
-                self._input_bounds.append((name, entry.minimum, entry.maximum))
         variable = kind(name, causality=causality, description=description,
                         variability=variability, initial=initial)
         self.register_variable(variable)
@@ -127,32 +96,42 @@ class SonotrackSlave(Fmi2Slave):
         if causality == Fmi2Causality.output:
             self._dependencies[name] = tuple(depends_on or ())
 
-    def _declared_range(self, kind, name, unit):
-        """The valid range of a parameter or input; a port without one cannot be declared."""
-        table = self.valid_ranges
-        where = table.source if table is not None else f"{type(self).__name__}.valid_ranges"
-        entry = table.entry(name) if table is not None else None
-        if entry is None:
-            raise ValueError(f"port {name!r} has no valid range in {where}")
-        if entry.type != _KIND[kind] or (kind is Real and entry.unit != unit):
-            raise ValueError(f"port {name!r} is {_KIND[kind]} [{unit}] but {where} says "
-                             f"{entry.type} [{entry.unit}]")
-        problem = entry.problem(getattr(self, name))
-        if problem is not None:
-            raise ValueError(f"start value of {problem} ({where})")
-        return entry
+    def _declare_from_table(self, causality, entries, names):
+        """Set each port of ``entries`` to its start value and declare it (see declare_inputs)."""
+        declared = {v.name for v in self.vars.values()}
+        for name in names or [name for name in entries if name not in declared]:
+            if name not in entries or name in declared:
+                state = "is declared already" if name in declared else "has no entry"
+                raise ValueError(f"{causality.name} {name!r} {state} in "
+                                 f"{self.valid_ranges.source}; {causality.name}s of the "
+                                 f"table: {', '.join(entries)}")
+            entry = entries[name]
+            setattr(self, name, entry.start)
+            self._declare(_VARIABLE[entry.type], name, causality, entry.description, entry.unit)
+            declared.add(name)
+            if causality == Fmi2Causality.input and entry.type in ("Real", "Integer"):
+                self._input_bounds.append((name, entry.minimum, entry.maximum))
 
-    def input_real(self, name, unit, description):
-        """Declare a Real input with its SI unit."""
-        self._declare(Real, name, Fmi2Causality.input, description, unit)
+    def declare_inputs(self, *names):
+        """Declare inputs of ``valid_ranges``, each set to its start value first.
 
-    def input_integer(self, name, description):
-        """Declare a discrete Integer input."""
-        self._declare(Integer, name, Fmi2Causality.input, description)
+        With ``names``, those inputs in that order; without, every input of the table not yet
+        declared, in table order (which fixes the value references).
+        """
+        self._declare_from_table(Fmi2Causality.input, self.valid_ranges.inputs, names)
 
-    def input_boolean(self, name, description):
-        """Declare a discrete Boolean input."""
-        self._declare(Boolean, name, Fmi2Causality.input, description)
+    def declare_parameters(self, *names):
+        """Declare parameters of ``valid_ranges``, each set to its start value first.
+
+        With ``names``, those parameters in that order; without, every parameter of the table
+        not yet declared, in table order (which fixes the value references).
+        """
+        self._declare_from_table(Fmi2Causality.parameter, self.valid_ranges.parameters, names)
+
+    def parameter_values(self):
+        """Every parameter of ``valid_ranges`` by name, as its type: a core's keyword arguments."""
+        return {name: _VALUE[entry.type](getattr(self, name))
+                for name, entry in self.valid_ranges.parameters.items()}
 
     def output_real(self, name, unit, description, depends_on=()):
         """Declare a Real output; ``depends_on`` names the inputs it feeds through directly.
@@ -171,22 +150,6 @@ class SonotrackSlave(Fmi2Slave):
     def output_boolean(self, name, description, depends_on=()):
         """Declare a discrete Boolean output."""
         self._declare(Boolean, name, Fmi2Causality.output, description, None, depends_on)
-
-    def parameter_real(self, name, unit, description):
-        """Declare a fixed Real parameter with its SI unit."""
-        self._declare(Real, name, Fmi2Causality.parameter, description, unit)
-
-    def parameter_integer(self, name, description):
-        """Declare a fixed Integer parameter."""
-        self._declare(Integer, name, Fmi2Causality.parameter, description)
-
-    def parameter_boolean(self, name, description):
-        """Declare a fixed Boolean parameter."""
-        self._declare(Boolean, name, Fmi2Causality.parameter, description)
-
-    def parameter_string(self, name, description):
-        """Declare a fixed String parameter (a mode or a file name)."""
-        self._declare(String, name, Fmi2Causality.parameter, description)
 
     # ----- batched get/set without per-variable indirection ---------------------------------
     def _names(self, kind, vrs):

@@ -3,27 +3,9 @@
 from ..common.errors import InputError
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .geometry import RADIUS_STRAIGHT
-from .planner import BEARING_NOISE, FIX_NEGATIVE, TargetPlanner
+from .planner import FIX_NEGATIVE, TargetPlanner
 
 __all__ = ["CurvaturePlanner"]
-
-_REAL_PARAMETERS = (
-    ("track_width", "m", 0.289, "distance between the wheels, L of Eqs. (38)-(42)"),
-    ("v_cruise", "m/s", 0.3, "cruise speed of the robot centre, V of Eqs. (41)-(42)"),
-    ("v_max", "m/s", 0.4, "largest wheel speed (Eq. 43)"),
-    ("a_max", "m/s2", 0.4, "largest wheel acceleration (Eq. 44)"),
-    ("stop_distance", "m", 0.5, "straight-line distance from the target at which to stop"),
-    ("max_target_speed", "m/s", 0.0, "fix gate: a fix implying a faster target is rejected "
-     "(docs/faults.md); 0 disables"),
-    ("target_jump_margin", "m", 0.3, "fix gate: localization error allowed on top of "
-     "max_target_speed * time since the last accepted fix"),
-    ("wheel_check_time", "s", 0.0, "stop for 1 s when a wheel told to turn shows no encoder "
-     "count for this long (frozen encoder, stalled wheel); 0 disables"),
-    ("fix_timeout", "s", 0.0, "after this long without an accepted fix, drive out the last "
-     "arc at half speed and stop at its end; 0 disables"),
-    ("bearing_noise", "rad", BEARING_NOISE, "odometry check: largest bearing error of one "
-     "fix (docs/faults.md)"),
-)
 
 
 class CurvaturePlanner(SonotrackSlave):
@@ -41,16 +23,6 @@ class CurvaturePlanner(SonotrackSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.distance = 0.0
-        self.bearing = 0.0
-        self.valid = False
-        self.measurement_id = 0
-        self.wheel_speed_left = 0.0
-        self.wheel_speed_right = 0.0
-        for name, _, default, _ in _REAL_PARAMETERS:
-            setattr(self, name, default)
-        self.mode = "curvature"
-        self.odometry_check = False
         self.core = TargetPlanner()
         self.v_ref_left = 0.0
         self.v_ref_right = 0.0
@@ -71,12 +43,7 @@ class CurvaturePlanner(SonotrackSlave):
         self.bearing_discrepancy = 0.0
         self.bearing_bound = 0.0
 
-        self.input_real("distance", "m", "distance of the latest fix from the array centre")
-        self.input_real("bearing", "rad", "bearing of the latest fix, left (CCW) positive")
-        self.input_boolean("valid", "the latest fix is usable")
-        self.input_integer("measurement_id", "fix counter; a change marks a new fix")
-        self.input_real("wheel_speed_left", "m/s", "measured left wheel rim speed")
-        self.input_real("wheel_speed_right", "m/s", "measured right wheel rim speed")
+        self.declare_inputs()
         self.output_real("v_ref_left", "m/s", "left wheel speed reference, held to the next step")
         self.output_real("v_ref_right", "m/s", "right wheel speed reference, held to the next step")
         self.output_real("radius", "m", f"radius of the path driven (Eq. 36); {RADIUS_STRAIGHT:g} "
@@ -103,12 +70,7 @@ class CurvaturePlanner(SonotrackSlave):
                          "max_target_speed and the fix noise explain (0 when off)")
         self.output_integer("stop_reason", "why the references are held at 0: 0 they are not, "
                             "1 wheel check, 2 odometry check")
-        for name, unit, _, text in _REAL_PARAMETERS:
-            self.parameter_real(name, unit, text)
-        self.parameter_string("mode", "curvature (the paper), rotate_then_go or pure_pursuit")
-        self.parameter_boolean("odometry_check", "stop for 1 s when the fixes' bearings drift "
-                               "from the odometry's prediction by more than a source at "
-                               "max_target_speed and the fix noise explain (docs/faults.md)")
+        self.declare_parameters()
         # distance and bearing mean something only while valid is true.
         self._bounds_valid = self.input_bounds(("distance", "bearing", "measurement_id",
                                                 "wheel_speed_left", "wheel_speed_right"))
@@ -116,9 +78,7 @@ class CurvaturePlanner(SonotrackSlave):
                                                   "wheel_speed_right"))
 
     def exit_initialization_mode(self):
-        parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
-        self.core = TargetPlanner(mode=str(self.mode), odometry_check=bool(self.odometry_check),
-                                  **parameters)
+        self.core = TargetPlanner(**self.parameter_values())
 
     def do_step(self, current_time, step_size):
         left, right = self.wheel_speed_left, self.wheel_speed_right

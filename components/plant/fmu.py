@@ -1,39 +1,10 @@
 """The RobotPlant FMU: a thin pythonfmu slave around :class:`RobotPlantCore`."""
 
-from dataclasses import fields
-
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .parameters import PlantParameters
 from .plant import RobotPlantCore
 
 __all__ = ["RobotPlant"]
-
-_REAL_PARAMETERS = (
-    ("mass", "kg", "robot mass"),
-    ("yaw_inertia", "kg.m2", "body yaw inertia about the axle midpoint"),
-    ("wheel_radius", "m", "driven wheel radius"),
-    ("track_width", "m", "distance between the wheel contact points"),
-    ("wheel_inertia", "kg.m2", "inertia of one wheel with hub about its axle"),
-    ("motor_resistance", "Ohm", "armature resistance R"),
-    ("motor_inductance", "H", "armature inductance L"),
-    ("torque_constant", "N.m/A", "motor torque constant Kt"),
-    ("back_emf_constant", "V.s/rad", "motor back-EMF constant Ke"),
-    ("motor_viscous_friction", "N.m.s/rad", "viscous friction at the motor shaft"),
-    ("rotor_inertia", "kg.m2", "motor rotor inertia"),
-    ("gear_ratio", "1", "motor revolutions per wheel revolution"),
-    ("gear_efficiency", "1", "fraction of motor torque reaching the wheel, in (0, 1]"),
-    ("speed_window", "s", "period over which encoder counts give the wheel speed"),
-    ("mu", "1", "tyre-floor friction coefficient"),
-    ("slip_stiffness", "1", "initial slope of traction force over slip, per newton of load"),
-    ("slip_speed_floor", "m/s", "smallest speed normalising the slip (standstill)"),
-    ("v_supply", "V", "battery voltage; inputs are clamped to +-v_supply"),
-    ("gravity", "m/s2", "gravitational acceleration"),
-    ("x0", "m", "start x of the axle midpoint"),
-    ("y0", "m", "start y of the axle midpoint"),
-    ("heading0", "rad", "start heading, counter-clockwise from +x"),
-    ("max_substep", "s", "longest internal integration step"),
-    ("substep_tolerance", "m/s", "tyre linearisation defect per substep above which it is split"),
-)
 
 # Output port -> (unit, description, core attribute). Every output is a state or a function of
 # the state, so none depends directly on the inputs.
@@ -80,36 +51,23 @@ class RobotPlant(SonotrackSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        defaults = PlantParameters()
-        self.voltage_left = 0.0
-        self.voltage_right = 0.0
-        for name, _, _ in _REAL_PARAMETERS:
-            setattr(self, name, float(getattr(defaults, name)))
-        self.encoder_ppr = defaults.encoder_ppr
-        self.fault_schedule = ""
-        self.core = RobotPlantCore(defaults)
+        self.core = RobotPlantCore(PlantParameters())
         self._publish()
 
-        self.input_real("voltage_left", "V", "left armature voltage (clamped to +-v_supply)")
-        self.input_real("voltage_right", "V", "right armature voltage (clamped to +-v_supply)")
+        self.declare_inputs()
         for name, unit, text in _REAL_OUTPUTS:
             self.output_real(name, unit, text)
         for name, _, text in _SUPPLY_OUTPUTS:
             self.output_real(name, "V", text)
         for name, text in _INTEGER_OUTPUTS:
             self.output_integer(name, text)
-        for name, unit, text in _REAL_PARAMETERS:
-            self.parameter_real(name, unit, text)
-        self.parameter_integer("encoder_ppr", "encoder counts per wheel revolution")
-        self.parameter_string("fault_schedule", "faults this FMU applies (supply_sag, "
-                              "encoder_skip, encoder_freeze, low_friction): a JSON list "
-                              "(docs/faults.md); empty: none")
+        self.declare_parameters()
         self.output_integer("faults_active", "faults of fault_schedule active in the last step")
 
     def exit_initialization_mode(self):
-        values = {field.name: getattr(self, field.name) for field in fields(PlantParameters)}
-        self.core = RobotPlantCore(PlantParameters(**values),
-                                   fault_schedule=str(self.fault_schedule))
+        values = self.parameter_values()
+        fault_schedule = values.pop("fault_schedule")
+        self.core = RobotPlantCore(PlantParameters(**values), fault_schedule=fault_schedule)
         self._publish()
 
     def do_step(self, current_time, step_size):

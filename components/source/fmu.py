@@ -1,26 +1,9 @@
 """The SoundSource FMU: a thin pythonfmu slave around :class:`MovingSource`."""
 
-import math
-
 from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
 from .source import MovingSource
 
 __all__ = ["SoundSource"]
-
-_REAL_PARAMETERS = (
-    ("v_max", "m/s", 0.2, "cruise speed along the path"),
-    ("a_max", "m/s2", 0.2, "acceleration and deceleration along the path"),
-    ("x0", "m", 0.0, "start x of the built-in paths (world frame, x right)"),
-    ("y0", "m", 1.0, "start y of the built-in paths (world frame, y forward)"),
-    ("heading0", "rad", 0.5 * math.pi, "start heading of the built-in paths, CCW from +x"),
-    ("length", "m", 6.0, "forward extent of the straight and s_curve paths"),
-    ("amplitude", "m", 0.5, "lateral peak of the s_curve path"),
-    ("emit_period", "s", 0.01, "time between band-limited bursts"),
-    ("start_delay", "s", 0.0, "time at rest before moving"),
-    ("x1", "m", 0.0, "static path only: x of the second position (see switch_time)"),
-    ("y1", "m", 0.0, "static path only: y of the second position (see switch_time)"),
-    ("switch_time", "s", -1.0, "static path only: time the source moves to (x1, y1); < 0 never"),
-)
 
 
 class SoundSource(SonotrackSlave):
@@ -36,11 +19,6 @@ class SoundSource(SonotrackSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.path = "straight"
-        self.mute_at_end = True
-        self.fault_schedule = ""
-        for name, _, default, _ in _REAL_PARAMETERS:
-            setattr(self, name, default)
         self.core = MovingSource()
         self._copy_outputs()
 
@@ -54,18 +32,13 @@ class SoundSource(SonotrackSlave):
         self.output_real("speed", "m/s", "speed along the path")
         self.output_integer("burst_count", "number of bursts started so far")
         self.output_real("last_burst_time", "s", "onset of the latest burst (-1 before the first)")
-        self.parameter_string("path", "straight, s_curve, static, or a CSV file of waypoints x,y")
-        self.parameter_boolean("mute_at_end", "fall silent when the end of the path is reached")
-        self.parameter_string("fault_schedule", "faults this FMU applies (source_silent): a "
-                              "JSON list of {kind, start, end} (docs/faults.md); empty: none")
+        # faults_active sits between parameters so that every value reference stays as published
+        self.declare_parameters("path", "mute_at_end", "fault_schedule")
         self.output_integer("faults_active", "faults of fault_schedule active now")
-        for name, unit, _, text in _REAL_PARAMETERS:
-            self.parameter_real(name, unit, text)
+        self.declare_parameters()
 
     def exit_initialization_mode(self):
-        parameters = {name: float(getattr(self, name)) for name, _, _, _ in _REAL_PARAMETERS}
-        self.core = MovingSource(path=str(self.path), mute_at_end=bool(self.mute_at_end),
-                                 fault_schedule=str(self.fault_schedule), **parameters)
+        self.core = MovingSource(**self.parameter_values())
         self._copy_outputs()
 
     def do_step(self, current_time, step_size):

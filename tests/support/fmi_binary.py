@@ -232,14 +232,10 @@ PROBE_SOURCE = textwrap.dedent('''
 
         def __init__(self, **kwargs):
             super().__init__(**kwargs)
-            self.action = 0
-            self.refuse_init = False
             self.count = 0
             self.elapsed = 0.0
-            self.input_integer("action", "0 ok, 1 InputError, 2 StepRejectedError, "
-                               "3 ZeroDivisionError, 4 return None, 5 return False, "
-                               "6 log sys.prefix")
-            self.parameter_boolean("refuse_init", "exit_initialization_mode returns False")
+            self.declare_inputs()
+            self.declare_parameters()
             self.output_integer("count", "steps taken")
             self.output_real("elapsed", "s", "time stepped")
 
@@ -269,12 +265,18 @@ PROBE_SOURCE = textwrap.dedent('''
 ''')
 
 
-# Every SonotrackSlave declares the valid range of each parameter and input.
+# Every SonotrackSlave declares its parameters and inputs from its port table.
 PROBE_RANGES = textwrap.dedent('''
     [step]
     step_size = { type = "Real", unit = "s", min = 1e-6, max = 1.0 }
-    [inputs]
-    action = { type = "Integer", min = 0, max = 6 }
-    [parameters]
-    refuse_init = { type = "Boolean" }
+    [inputs.action]
+    description = "0 ok, 1 InputError, 2 StepRejectedError, 3 ZeroDivisionError, 4 return None, 5 return False, 6 log sys.prefix"
+    type = "Integer"
+    start = 0
+    min = 0
+    max = 6
+    [parameters.refuse_init]
+    description = "exit_initialization_mode returns False"
+    type = "Boolean"
+    start = false
 ''')

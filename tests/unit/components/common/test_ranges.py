@@ -1,17 +1,18 @@
-"""Valid-range tables: one per FMU, complete, consistent with the cores, strict on types."""
+"""Port tables: one per FMU, complete, consistent with the cores, strict on types; a malformed
+table is refused naming the file, the entry and the valid choices."""
 
 import math
 
 import pytest
 
+from components import FMU_PACKAGES
 from components.acoustics.estimators import ESTIMATORS
 from components.acoustics.gcc import WEIGHTINGS
-from components.common.errors import ConfigError, ParameterError
+from components.common.errors import ConfigError
 from components.common.ranges import ValidRange, load_ranges
 from components.control.controller import MODES as CONTROL_MODES
 from components.control.inference import METHODS
 from components.planner.planner import MODES as PLANNER_MODES
-from orchestrator.builder.fmus import FMU_PACKAGES
 
 PARTS = sorted(FMU_PACKAGES.values())
 
@@ -23,19 +24,6 @@ def test_every_table_loads_with_finite_bounds_and_a_positive_step(part):
     for entry in list(table.parameters.values()) + list(table.inputs.values()):
         if entry.type in ("Real", "Integer"):
             assert math.isfinite(entry.minimum) and entry.minimum <= entry.maximum
-
-
-@pytest.mark.parametrize("model, part", sorted(FMU_PACKAGES.items()))
-def test_every_declared_parameter_and_input_has_exactly_one_range(model, part):
-    import importlib
-
-    module = importlib.import_module(f"components.{part}.fmu")
-    slave = getattr(module, model)(instance_name="t")
-    slave.to_xml()   # raises if a table entry is not a declared port
-    declared = {v.name for v in slave.vars.values()
-                if v.causality.name in ("parameter", "input")}
-    table = load_ranges(part)
-    assert declared == set(table.parameters) | set(table.inputs)
 
 
 def test_string_choices_are_the_cores_registries():
@@ -81,59 +69,146 @@ def test_valid_values_including_the_bounds_pass(entry, value):
     assert entry.problem(value) is None
 
 
-def test_a_malformed_table_is_refused(tmp_path, monkeypatch):
+@pytest.fixture
+def write_table(tmp_path, monkeypatch):
+    """Write ``components/bad/ranges.toml`` under ``tmp_path``; return its path and a loader."""
     import components.common.ranges as ranges
 
     part = tmp_path / "components" / "bad"
     part.mkdir(parents=True)
     (tmp_path / "components" / "common").mkdir()
     monkeypatch.setattr(ranges, "__file__", str(tmp_path / "components" / "common" / "x.py"))
-    (part / "ranges.toml").write_text('[step]\nstep_size = { type = "Real", unit = "s", '
-                                      'min = 1e-6, max = 1.0 }\n[parameters]\n'
-                                      'gain = { type = "Real", unit = "1", min = 1.0 }\n')
-    with pytest.raises(ConfigError, match="gain needs finite min and max"):
-        ranges.load_ranges("bad")
-    (part / "ranges.toml").write_text('[parameters]\n')
-    with pytest.raises(ConfigError, match=r"\[step\] step_size .* is missing"):
-        ranges.load_ranges("bad")
+    path = part / "ranges.toml"
+
+    def write(text, step=STEP):
+        path.write_text(step + text)
+        return path
+
+    return write
 
 
-def test_the_slave_refuses_every_bad_parameter_at_once():
-    from components.plant.fmu import RobotPlant
-
-    slave = RobotPlant(instance_name="plant")
-    slave.mass, slave.encoder_ppr = -1.0, 0
-    with pytest.raises(ParameterError) as caught:
-        slave.exit_initialization_mode()
-    assert str(caught.value) == ("plant: parameter mass = -1.0 is outside its valid range "
-                                 "[0.1, 1000.0] kg; parameter encoder_ppr = 0 is outside its "
-                                 "valid range [1, 1000000]")
+STEP = '[step]\nstep_size = { type = "Real", unit = "s", min = 1e-6, max = 1.0 }\n'
+GAIN = {"description": '"a gain"', "type": '"Real"', "unit": '"1"', "start": "0.5",
+        "min": "-1.0", "max": "1.0"}
+MODE = {"description": '"a mode"', "type": '"String"', "start": '"slow"',
+        "choices": '["slow", "calm"]'}
 
 
-def test_a_core_refusal_names_the_instance():
-    from components.acoustics.fmu import AcousticLocalizer
-
-    slave = AcousticLocalizer(instance_name="localizer")
-    slave.band_high = 500.0   # inside its range, but below band_low
-    with pytest.raises(ParameterError, match=r"^localizer: AcousticLocalizer: band_high = 500.0"):
-        slave.exit_initialization_mode()
+def _entry(name, spec, **change):
+    """A ``[parameters]`` line: ``spec`` with keys replaced (value None: key removed)."""
+    spec = {k: v for k, v in dict(spec, **change).items() if v is not None}
+    return f"[parameters]\n{name} = {{ {', '.join(f'{k} = {v}' for k, v in spec.items())} }}\n"
 
 
-def test_an_input_or_step_outside_its_range_is_a_logged_discard():
-    from components.control.fmu import WheelController
+def test_a_complete_table_loads(write_table):
+    from components.common.ranges import load_ranges
 
-    slave = WheelController(instance_name="c")
-    logged = []
-    slave.log = lambda message, status=None, *a, **k: logged.append(message)
-    slave.exit_initialization_mode()
-    slave.v_ref = 1e308
-    assert slave.do_step(0.0, 0.02) is False
-    slave.v_ref = 0.1
-    assert slave.do_step(0.0, 0.0) is False
-    assert logged == ["c: input v_ref = 1e+308 refused: outside its valid range [-100.0, 100.0] "
-                      "m/s", "c: input step_size = 0.0 refused: the communication step must be "
-                      "in [1e-06, 1.0] s"]
-    assert slave.do_step(0.0, 0.02) is True
+    write_table(_entry("gain", GAIN))
+    entry = load_ranges("bad").parameters["gain"]
+    assert (entry.description, entry.start, entry.unit, entry.minimum) == ("a gain", 0.5, "1", -1.0)
+
+
+@pytest.mark.parametrize("text, message", [
+    (_entry("gain", GAIN, unit=None),
+     "parameter gain: a Real needs its unit, one of 1, m, m2, s, Hz, m/s"),
+    (_entry("gain", GAIN, unit='"furlong"'),
+     "parameter gain: unit 'furlong' is not known, one of 1, m, m2, s, Hz, m/s"),
+    (_entry("gain", GAIN, type='"Float"'),
+     "parameter gain: type 'Float' is not one of Real, Integer, Boolean, String"),
+    (_entry("gain", GAIN, start="5.0"),
+     "start value of parameter gain = 5.0 is outside its valid range [-1.0, 1.0]"),
+    (_entry("gain", GAIN, start='"0.5"'),
+     "start value of parameter gain = '0.5' is a string, expected a number in [-1.0, 1.0]"),
+    (_entry("gain", GAIN, start="true"),
+     "start value of parameter gain = true is a boolean, expected a number in [-1.0, 1.0]"),
+    (_entry("mode", MODE, start='"fast"'),
+     "start value of parameter mode = 'fast' is not valid; valid: one of 'slow', 'calm'"),
+    (_entry("gain", GAIN, start=None), "parameter gain: needs a start value of type Real"),
+    (_entry("gain", GAIN, description=None), "parameter gain: needs a description"),
+    (_entry("gain", GAIN, description='" "'), "parameter gain: needs a description"),
+    (_entry("gain", GAIN, default="0.5"),
+     "parameter gain: unknown keys ['default']; valid keys: description, type, unit, start, "
+     "min, max, choices, file_suffix, why"),
+    (_entry("mode", MODE, unit='"m"'), "parameter mode: a unit applies to a Real only"),
+    (_entry("gain", GAIN, max=None), "parameter gain: needs finite min and max"),
+    (_entry("gain", GAIN, min="2.0"), "parameter gain: min 2.0 > max 1.0"),
+    ('[inputs]\nu = { description = "u", type = "Integer", start = 1.5, min = 0, max = 3 }\n',
+     "start value of input u = 1.5 is a number, expected an integer in [0, 3]"),
+], ids=["missing unit", "unknown unit", "unknown type", "start outside its range",
+        "start a string", "start a bool", "start not a choice", "missing start",
+        "missing description", "blank description", "unknown key", "unit on a String",
+        "missing max", "min above max", "integer input with a float start"])
+def test_a_malformed_entry_is_refused_naming_file_entry_and_valid_choices(
+        write_table, text, message):
+    from components.common.ranges import load_ranges
+
+    path = write_table(text)
+    with pytest.raises(ConfigError) as caught:
+        load_ranges("bad")
+    assert f"{path}: {message}" in str(caught.value)
+
+
+def test_every_problem_of_a_table_is_reported_at_once(write_table):
+    from components.common.ranges import load_ranges
+
+    path = write_table(_entry("gain", GAIN, unit=None, start="5.0")
+                       + 'mode = { description = "m", type = "Text", start = "a" }\n')
+    with pytest.raises(ConfigError) as caught:
+        load_ranges("bad")
+    lines = str(caught.value).splitlines()
+    assert [line.split(": ")[1] for line in lines] == ["parameter gain", "parameter mode"]
+    assert all(line.startswith(f"{path}: ") for line in lines)
+
+
+def test_the_communication_step_range_is_required(write_table):
+    from components.common.ranges import load_ranges
+
+    path = write_table(_entry("gain", GAIN), step="")
+    with pytest.raises(ConfigError, match=r"\[step\] step_size .* is missing") as caught:
+        load_ranges("bad")
+    assert str(caught.value).startswith(str(path))
+
+
+# Each core's own defaults, read from the core (its keyword defaults or its DEFAULTS table).
+def _keyword_defaults(function):
+    import inspect
+
+    return {name: p.default for name, p in inspect.signature(function).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+def _core_defaults(part):
+    import dataclasses
+
+    if part == "acoustics":
+        from components.acoustics.localizer import LocalizerCore
+        from components.acoustics.settings import DEFAULTS
+        return dict(DEFAULTS, **_keyword_defaults(LocalizerCore))
+    if part == "control":
+        from components.control.controller import DEFAULTS
+        return dict(DEFAULTS)
+    if part == "plant":
+        from components.plant import PlantParameters, RobotPlantCore
+        defaults = _keyword_defaults(RobotPlantCore)
+        del defaults["parameters"]
+        return dict(dataclasses.asdict(PlantParameters()), **defaults)
+    if part == "planner":
+        from components.planner.planner import TargetPlanner
+        return _keyword_defaults(TargetPlanner)
+    from components.source.source import MovingSource
+    return _keyword_defaults(MovingSource)
+
+
+@pytest.mark.parametrize("part", PARTS)
+def test_start_values_are_the_cores_defaults(part, repo_root):
+    import tomllib
+
+    table = tomllib.loads((repo_root / "components" / part / "ranges.toml").read_text())
+    starts = {name: spec["start"] for name, spec in table["parameters"].items()}
+    defaults = _core_defaults(part)
+    assert starts == defaults
+    assert {n for n, v in starts.items() if isinstance(v, bool)} == \
+        {n for n, v in defaults.items() if isinstance(v, bool)}
 
 
 def test_plant_core_bounds_the_work_of_one_step():

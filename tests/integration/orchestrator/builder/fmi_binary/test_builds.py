@@ -5,6 +5,7 @@ sources it was compiled from) is checked in tests/unit/orchestrator/builder/test
 """
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -47,10 +48,16 @@ def test_two_builds_of_one_model_each_run_their_own_code(fmu_paths, tmp_path):
     components = tmp_path / "components"
     shutil.copytree(REPO_ROOT / "components", components,
                     ignore=shutil.ignore_patterns("__pycache__"))
+    # the core's default and the FMU's start value (the port table) of v_supply, as one change
     controller = components / "control" / "controller.py"
     source = controller.read_text()
     assert '"v_supply": 11.1,' in source
     controller.write_text(source.replace('"v_supply": 11.1,', '"v_supply": 7.5,'))
+    table = components / "control" / "ranges.toml"
+    text, count = re.subn(r"(\[parameters\.v_supply\][^\[]*\nstart = )11\.1\n", r"\g<1>7.5\n",
+                          table.read_text())
+    assert count == 1
+    table.write_text(text)
     changed = build_fmu("WheelController", tmp_path / "b", components_dir=components)
     original = fmu_paths["WheelController"]
     for order in ([original, changed], [changed, original]):
