@@ -16,6 +16,7 @@ import json
 from pathlib import Path
 
 from orchestrator.files.atomic import atomic_write_text
+from orchestrator.files.json_policy import dumps
 
 __all__ = ["finished_summary", "read_summary", "table_columns", "write_atomic", "write_table"]
 
@@ -61,7 +62,7 @@ def write_table(rows, out_dir, settings=()):
     out_dir = Path(out_dir)
     table_json = out_dir / "sweep.json"
     table_csv = out_dir / "sweep.csv"
-    write_atomic(table_json, json.dumps(rows, indent=2, allow_nan=True) + "\n")
+    write_atomic(table_json, dumps(rows, indent=2) + "\n")
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, table_columns(rows, settings), lineterminator="\n")
     writer.writeheader()
