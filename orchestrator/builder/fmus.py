@@ -28,8 +28,8 @@ from orchestrator.builder.fmi_binary import build_tag, install_binary
 from orchestrator.builder.documentation import document_fmu
 
 __all__ = [
-    "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "entry_script", "private_package_name",
-    "write_ssp_archive",
+    "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "carried_package", "entry_script",
+    "private_package_name", "write_ssp_archive",
 ]
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -49,7 +49,8 @@ def private_package_name(name, tag):
     return f"_sonotrack_{name.lower()}_{tag}"
 
 
-def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
+def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(),
+              resources=(), notes_file=None):
     """Build one FMU and return the path of the ``.fmu`` file.
 
     Parameters
@@ -62,6 +63,14 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
         The ``components`` package to take the slave and cores from.
     packages : dict, optional
         Model name to sub-package mapping; defaults to :data:`FMU_PACKAGES`.
+    bundle : iterable of str, optional
+        Further sub-packages of ``components_dir`` the FMU carries (the whole-system FMU
+        carries every part it runs).
+    resources : iterable of path-like, optional
+        Files put into the FMU's ``resources/`` folder (and beside the entry script while
+        pythonfmu builds, where the slave finds them as its ``resources``).
+    notes_file : path-like, optional
+        The notes of ``documentation/index.html``; default ``docs/<sub-package>.md``.
 
     Returns
     -------
@@ -80,8 +89,9 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
         raise BuildError(f"FMU {name}: slave module {slave_file} does not exist")
     dest_dir = Path(dest_dir)
     dest_dir.mkdir(parents=True, exist_ok=True)
-    private = private_package_name(
-        name, build_tag(name, [components_dir / "common", components_dir / subpackage]))
+    parts = list(dict.fromkeys([subpackage, *bundle]))
+    resources = [Path(r) for r in resources]
+    private = carried_package(name, components_dir, parts, resources)
     with tempfile.TemporaryDirectory(prefix="sonotrack_build_") as stage:
         stage = Path(stage)
         package_dir = stage / private
@@ -89,13 +99,18 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
         (package_dir / "__init__.py").write_text(
             f'"""Private copy of the sonotrack cores bundled in the {name} FMU."""\n')
         shutil.copytree(components_dir / "common", package_dir / "common", ignore=_IGNORE)
-        shutil.copytree(components_dir / subpackage, package_dir / subpackage, ignore=_IGNORE)
+        for part in parts:
+            shutil.copytree(components_dir / part, package_dir / part, ignore=_IGNORE)
+        for resource in resources:
+            shutil.copy2(resource, stage / resource.name)
         script = stage / f"{name}.py"
         script.write_text(entry_script(slave_file.read_text(), private, subpackage))
         saved_path = list(sys.path)
         try:
             fmu_path = FmuBuilder.build_FMU(script, dest=dest_dir / f"{name}.fmu",
-                                            project_files=[package_dir], **_STATE_OPTIONS)
+                                            project_files=[package_dir] + [
+                                                stage / r.name for r in resources],
+                                            **_STATE_OPTIONS)
         except Exception as exc:  # pythonfmu raises bare exceptions; name the FMU
             raise BuildError(f"FMU {name}: pythonfmu build failed: {exc!r}") from exc
         finally:
@@ -107,8 +122,22 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None):
     _check_built(Path(fmu_path), name)
     install_binary(fmu_path, private, name, name)
     # last: metadata and documentation/index.html from the final modelDescription.xml
-    document_fmu(fmu_path, slave_file, components_dir.parent / "docs" / f"{subpackage}.md")
+    document_fmu(fmu_path, slave_file,
+                 notes_file or components_dir.parent / "docs" / f"{subpackage}.md")
     return Path(fmu_path)
+
+
+def carried_package(name, components_dir, parts, resources=()):
+    """The private package name of FMU ``name`` built now from ``components_dir``.
+
+    ``parts`` are the sub-packages it carries beside ``common`` (its own first), ``resources``
+    the files it carries in ``resources/``. An FMU built earlier from other code carries
+    another name (:func:`private_package_name` of another tag).
+    """
+    components_dir = Path(components_dir)
+    return private_package_name(
+        name, build_tag(name, [components_dir / "common"]
+                        + [components_dir / part for part in parts] + [Path(r) for r in resources]))
 
 
 def entry_script(slave_source, private, subpackage):

@@ -1,11 +1,12 @@
-"""The master's stepping rules, with plain-Python stand-ins for FMUs (no FMI involved)."""
+"""The master's stepping rules (components/system/master.py), with plain-Python stand-ins for
+FMUs (no FMI involved)."""
 
 from types import SimpleNamespace
 
 import pytest
 
 from components.common.errors import ConfigError, SimulationError
-from orchestrator.run.master import InstanceSpec, Link, Master
+from components.system.master import InstanceSpec, Link, Master
 
 
 class _Group:
@@ -173,3 +174,17 @@ def test_observed_outputs_ride_along_with_the_connected_reads_of_their_type():
     assert values[index] == -10.0
     # a.n (Integer) and b.y have no connected read of their type: read on request instead
     assert observed.observed_value("a.n") is None and observed.observed_value("b.y") is None
+
+
+def test_refreshed_buffers_hold_what_restored_instances_hold():
+    a, b = Recorder("a"), Recorder("b")
+    master = Master([InstanceSpec("a", a), InstanceSpec("b", b)], [Link("a.y", "b.u")], 0.1)
+    master.initialize()
+    master.run(0.2)   # a.y = 1 after each step, so b.u was set to 1 once
+    writes = len(b.writes)
+    # restore b as it was before any step (an FMU state): u = 0, while the buffer still says 1
+    b.u = 0.0
+    master.refresh_buffers()
+    master.step(2)
+    # the buffer was read back as 0, so the new value 1 differs and is sent again
+    assert len(b.writes) == writes + 1 and b.calls[-1][2] == 1.0
