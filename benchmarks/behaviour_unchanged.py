@@ -7,7 +7,8 @@ plots, and compares:
 
 - ``results.csv``: byte for byte;
 - ``summary.json``: every figure, except the two that measure the machine (``wall_time_s``,
-  ``realtime_factor``);
+  ``realtime_factor``) and the record of the process that ran it (``process``: its id, host and
+  start time differ at every run);
 - every FMU's ``modelDescription.xml``: byte for byte once ``guid`` and
   ``generationDateAndTime`` are masked (pythonfmu draws a new time-based GUID and stamps the
   time at every build, so two builds of one commit differ there and nowhere else);
@@ -35,7 +36,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIOS = ("s_curve", "straight", "static_case1", "dynamic_case2")
-MACHINE_FIGURES = {"wall_time_s", "realtime_factor"}
+# Differ at every run: the machine's speed, and which process ran (orchestrator.processes).
+MACHINE_FIGURES = {"wall_time_s", "realtime_factor", "process"}
 _BUILD_STAMPS = re.compile(rb'(guid|generationDateAndTime)="[^"]*"')
 
 

@@ -10,6 +10,7 @@ exit status 3, and the traceback only with ``SONOTRACK_TRACEBACK=1``.
 import argparse
 import os
 import sys
+import textwrap
 from pathlib import Path
 
 from components.common.errors import SimulationError, SonotrackError
@@ -25,11 +26,19 @@ def _cmd_build(args):
         if name not in FMU_PACKAGES:
             raise SonotrackError(f"unknown FMU {name!r}; valid choices: "
                                  f"{', '.join(FMU_PACKAGES)}")
+    if args.system:   # a wrong scenario name is one line before anything is built
+        from orchestrator.scenario import find_scenario
+
+        scenario = find_scenario(args.scenario or DEFAULT_SCENARIO)
     paths = build_all(args.out, names)
     for path in paths:
         print(f"built {path}")
     if names is None:
         _write_ssp(Path(args.out))
+    if args.system:
+        from orchestrator.run.as_fmu import build_scenario_fmu
+
+        print(f"built {build_scenario_fmu(scenario, args.out, fmu_dir=args.out)}")
     return 0
 
 
@@ -47,7 +56,7 @@ def _cmd_validate(args):
 
     paths = args.fmus or sorted(Path(args.dir).glob("*.fmu"))
     if not paths:
-        raise SonotrackError(f"sonotrack validate: no FMU given and none in {args.dir}; "
+        raise SonotrackError(f"no FMU given and none in {args.dir}; "
                              "run `sonotrack build` first")
     total = 0
     for report in validate_fmus(paths, simulate=not args.no_simulate):
@@ -60,18 +69,33 @@ def _cmd_validate(args):
     return min(total, 125)
 
 
+def _scenario(args):
+    """The scenario named on the command line, with its --stop-time and --set applied.
+
+    A --set word without '=' is reported first: its value was then read as the scenario.
+    """
+    from orchestrator.scenario import find_scenario, load_scenario, parse_override, parse_seconds
+
+    for text in args.set or []:
+        if "=" not in text:
+            parse_override(text, stray=args.scenario)   # raises, with the spelling that works
+    stop_time = (parse_seconds(args.stop_time, "--stop-time", maximum=1e9)
+                 if args.stop_time is not None else None)
+    path = find_scenario(args.scenario or DEFAULT_SCENARIO)
+    # a directory, bad TOML, a bad field: one line each, before anything is loaded
+    loaded = load_scenario(path, allow_outside=args.allow_outside)
+    return path, loaded, stop_time
+
+
 def _cmd_run(args):
     from orchestrator.run.runner import run_scenario
-    from orchestrator.scenario import load_scenario, parse_seconds
+    from orchestrator.run.summary_text import summary_lines
+    from orchestrator.scenario import apply_overrides, parse_seconds
 
     record_interval = parse_seconds(args.record_interval, "--record-interval")
-    scenario = args.scenario or DEFAULT_SCENARIO
-    if not Path(scenario).exists():
-        raise SonotrackError(f"scenario file {scenario} does not exist; shipped scenarios: "
-                             f"{', '.join(sorted(p.name for p in Path('scenarios').glob('*.toml')))}")
-    # a directory, bad TOML, a bad field: one line each, before anything is loaded
-    loaded = load_scenario(scenario, allow_outside=args.allow_outside)
-    out = Path(args.out) if args.out else Path("runs") / Path(scenario).stem
+    scenario, loaded, stop_time = _scenario(args)
+    loaded = apply_overrides(loaded, stop_time, args.set or ())
+    out = Path(args.out) if args.out else Path("runs") / loaded.name
     try:
         result = run_scenario(loaded, out, progress=not args.quiet, algorithm=args.master,
                               plots=not args.no_plots,
@@ -84,19 +108,14 @@ def _cmd_run(args):
             raise SonotrackError(f"{exc} (build the FMUs first: `sonotrack build`, or "
                                  "point --fmu-dir at them)") from exc
         raise
-    summary = result.summary
-    for key in ("final_distance_to_source_m", "min_distance_to_source_m", "final_position_error_m",
-                "path_rmse_m", "sim_time_s", "wall_time_s", "realtime_factor", "steps"):
-        if key in summary:
-            value = summary[key]
-            print(f"  {key:28s} {value:.4g}" if isinstance(value, float) else
-                  f"  {key:28s} {value}")
+    for line in summary_lines(result.summary):
+        print(line)
     if loaded.parameters:   # the values this run used, as the scenario gave them
         from components.common.ranges import show
 
         used = ", ".join(f"{k} = {show(v)}" for k, v in sorted(loaded.parameters.items()))
         print(f"  {'parameters':28s} {used}")
-    print(f"results: {result.out_dir.resolve()}")
+    print(f"results: {result.out_dir} (the figures: docs/metrics.md)")
     if result.plots_error:   # results and summary are complete; the pictures are not
         print(f"sonotrack run: error: {result.plots_error} (results.csv and summary.json are "
               f"complete; the summary records this as plots_error)", file=sys.stderr)
@@ -108,12 +127,11 @@ DEFAULT_SCENARIO = "scenarios/s_curve.toml"
 
 
 def _cmd_sweep(args):
-    from orchestrator.scenario import load_scenario
+    from orchestrator.scenario import apply_overrides
     from orchestrator.sweep import parse_assignment, parse_seeds, sweep
 
-    scenario_path = args.scenario or DEFAULT_SCENARIO
-    if not Path(scenario_path).is_file():
-        raise SonotrackError(f"scenario file {scenario_path} does not exist")
+    scenario_path, loaded, stop_time = _scenario(args)
+    loaded = apply_overrides(loaded, stop_time)
     grid = {}
     for text in args.set or []:
         key, values = parse_assignment(text)
@@ -122,8 +140,8 @@ def _cmd_sweep(args):
                                  f"--set, e.g. {key}=a,b")
         grid[key] = values
     seeds = parse_seeds(args.seeds) if args.seeds is not None else None
-    out = Path(args.out) if args.out else Path("runs") / f"sweep_{Path(scenario_path).stem}"
-    result = sweep(load_scenario(scenario_path, allow_outside=args.allow_outside), grid, out,
+    out = Path(args.out) if args.out else Path("runs") / f"sweep_{loaded.name}"
+    result = sweep(loaded, grid, out,
                    seeds=seeds, fmu_dir=args.fmu_dir, scheduler=args.scheduler,
                    workers=_workers(args.workers), progress=not args.quiet,
                    allow_outside=args.allow_outside)
@@ -134,6 +152,26 @@ def _cmd_sweep(args):
         print(f"  failed: {row['run_dir']}: {row.get('error', '')}", file=sys.stderr)
     print(f"table: {result.table_csv.resolve()}")
     return 1 if failed else 0
+
+
+def _cmd_info(args):
+    from orchestrator.builder.fmus import REPO_ROOT
+    from orchestrator.fmu.info import find_fmu, fmu_info, format_info
+
+    path = find_fmu(args.fmu, folders=(Path("fmus"), REPO_ROOT / "fmus"))
+    print(format_info(*fmu_info(path)))
+    return 0
+
+
+def _cmd_compare(args):
+    from orchestrator.run.compare import compare_runs
+
+    result = compare_runs(args.run_dirs, args.out)
+    print(result.text())
+    print(f"comparison: {result.markdown}")
+    for path in result.figures:
+        print(f"figure: {path}")
+    return 0
 
 
 def _workers(text):
@@ -151,30 +189,68 @@ def _workers(text):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (``sonotrack run: error: ...``), exit status 2."""
+    """argparse with one-line errors (``sonotrack run: error: ...``), exit status 2; the
+    line points to the help of the command it is about."""
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def _command(sub, name, summary, description, examples):
+    """A sub-command whose ``--help`` says what it does and shows examples."""
+    epilog = "examples:\n" + "\n".join(f"  {line}" for line in examples)
+    return sub.add_parser(name, help=summary, description=textwrap.fill(description, 79),
+                          epilog=epilog,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)
+
+
 def _parser(command=None):
-    parser = _Parser(prog="sonotrack", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="sonotrack", description=__doc__.splitlines()[0],
+                     epilog="Each command has its own help: sonotrack COMMAND --help. "
+                            "Guide: README.md; every command: docs/commands.md.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    build = sub.add_parser("build", help="build the FMUs into fmus/ (and fmus/tracking.ssp)")
+    build = _command(sub, "build", "build the FMUs into fmus/ (and fmus/tracking.ssp)",
+                     "Build the FMI 2.0 co-simulation FMUs (all five by default) and the "
+                     "SSP archive tracking.ssp.",
+                     ["sonotrack build", "sonotrack build WheelController --out /tmp/fmus",
+                      "sonotrack build --system"])
     build.add_argument("names", nargs="*", help="FMU names (default: all)")
     build.add_argument("--out", default="fmus", help="output folder (default: fmus)")
+    build.add_argument("--system", action="store_true",
+                       help="also build TrackingSystem.fmu: the whole loop of --scenario in one "
+                            "FMU, from the five FMUs in --out (docs/system_fmu.md)")
+    build.add_argument("--scenario", default=None,
+                       help=f"with --system: TOML file or shipped scenario name whose schedule "
+                            f"and parameter values it runs (default: {DEFAULT_SCENARIO})")
     build.set_defaults(func=_cmd_build)
 
-    validate = sub.add_parser("validate", help="check FMUs with fmpy, fmutool and a short run")
+    validate = _command(sub, "validate", "check FMUs with fmpy, fmutool and a short run",
+                        "Check FMUs with fmpy's validator, fmu-manipulation-toolbox's checker "
+                        "and a short simulation; print every problem. Exit status: the number "
+                        "of problems.", ["sonotrack validate", "sonotrack validate "
+                                         "fmus/RobotPlant.fmu --no-simulate"])
     validate.add_argument("fmus", nargs="*", type=Path, help="FMU files (default: fmus/*.fmu)")
     validate.add_argument("--dir", default="fmus", help="folder searched when no FMU is given")
     validate.add_argument("--no-simulate", action="store_true", help="skip the short simulation")
     validate.set_defaults(func=_cmd_validate)
 
-    run = sub.add_parser("run", help="run a scenario through our master on fmpy")
-    run.add_argument("scenario", nargs="?", help=f"TOML scenario (default: {DEFAULT_SCENARIO})")
+    run = _command(sub, "run", "run a scenario through our master on fmpy",
+                   "Run one scenario through sonotrack's master on fmpy; write results.csv, "
+                   "summary.json and PNG plots into one folder and print the summary "
+                   "(every figure is defined in docs/metrics.md).",
+                   ["sonotrack run                      # scenarios/s_curve.toml",
+                    "sonotrack run static_case1         # a shipped scenario, from any folder",
+                    "sonotrack run my.toml --stop-time 10 --set planner.v_cruise=0.2 "
+                    "--out runs/slow"])
+    run.add_argument("scenario", nargs="?",
+                     help=f"TOML file or shipped scenario name (default: {DEFAULT_SCENARIO})")
     run.add_argument("--out", help="results folder (default: runs/<scenario name>)")
+    run.add_argument("--stop-time", metavar="S",
+                     help="simulated seconds, replacing the scenario's stop_time")
+    run.add_argument("--set", action="append", metavar="INSTANCE.PARAM=VALUE",
+                     help="a parameter value, checked like the scenario's [parameters] "
+                          "(repeatable)")
     run.add_argument("--master", choices=("gauss-seidel", "jacobi"),
                      help="override the scenario's master algorithm")
     run.add_argument("--fmu-dir", help="folder of the FMUs (default: beside the .ssd)")
@@ -190,8 +266,17 @@ def _parser(command=None):
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=_cmd_run)
 
-    sweep = sub.add_parser("sweep", help="run a scenario over a parameter grid and seeds on Dask")
-    sweep.add_argument("scenario", nargs="?", help=f"TOML scenario (default: {DEFAULT_SCENARIO})")
+    sweep = _command(sub, "sweep", "run a scenario over a parameter grid and seeds on Dask",
+                     "Run every combination of the --set values and seeds as separate runs "
+                     "on Dask (this machine's cores, or a scheduler); resumable. Writes "
+                     "runs/<hash>/ per run and the table sweep.csv / sweep.json.",
+                     ["sonotrack sweep --set planner.v_cruise=0.2,0.3 --seeds 1..5",
+                      "sonotrack sweep straight --stop-time 10 --set planner.mode="
+                      "curvature,pure_pursuit --out runs/modes"])
+    sweep.add_argument("scenario", nargs="?",
+                       help=f"TOML file or shipped scenario name (default: {DEFAULT_SCENARIO})")
+    sweep.add_argument("--stop-time", metavar="S",
+                       help="simulated seconds of every run, replacing the scenario's")
     sweep.add_argument("--set", action="append", metavar="INSTANCE.PARAM=V1,V2",
                        help="parameter values to sweep (repeatable; all combinations run)")
     sweep.add_argument("--seeds", help="seeds, e.g. 1,2,3 or 1..10 (default: the scenario's)")
@@ -208,11 +293,32 @@ def _parser(command=None):
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(func=_cmd_sweep)
 
+    info = _command(sub, "info", "an FMU's variables: causality, type, unit, start, range",
+                    "Show what an FMU declares: model facts, then each variable's causality, "
+                    "type, unit, start value, valid range and description.",
+                    ["sonotrack info fmus/WheelController.fmu",
+                     "sonotrack info RobotPlant          # fmus/RobotPlant.fmu"])
+    info.add_argument("fmu", help="an .fmu file, or a model name found in fmus/")
+    info.set_defaults(func=_cmd_info)
+
+    compare = _command(sub, "compare", "finished runs side by side: figures and a table",
+                       "Overlay the trajectories and wheel speeds of finished runs and "
+                       "tabulate their summary figures; writes two PNGs and comparison.md.",
+                       ["sonotrack compare runs/s_curve runs/slow",
+                        "sonotrack compare runs/a runs/b runs/c --out runs/abc"])
+    compare.add_argument("run_dirs", nargs="+", metavar="RUN_DIR",
+                         help="run folders written by sonotrack run (two or more)")
+    compare.add_argument("--out", default="runs/compare",
+                         help="folder for the figures and comparison.md (default: "
+                              "runs/compare)")
+    compare.set_defaults(func=_cmd_compare)
+
     for name, (register, summary) in _EXTRA_COMMANDS.items():
         if command in (None, name):
             register(sub)
         else:  # listed in --help, but its module is not imported for another command
             sub.add_parser(name, help=summary)
+    parser.commands = sub.choices   # name -> its parser, for errors about its options
     return parser
 
 
@@ -247,7 +353,10 @@ def _command_named(argv):
 def main(argv=None):
     """Entry point of the ``sonotrack`` console script; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = _parser(_command_named(argv)).parse_args(argv)
+    parser = _parser(_command_named(argv))
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:   # named by the command they were given to, with its help
+        parser.commands[args.command].error(f"unrecognized arguments: {' '.join(unknown)}")
     try:
         return args.func(args)
     except SonotrackError as exc:

@@ -4,6 +4,8 @@
   binary and documentation) and the SSP archive;
 - :mod:`~orchestrator.builder.fmi_binary`: sonotrack's own FMI 2.0 binary (C sources and the
   Python that installs the compiled library into an FMU);
+- :mod:`~orchestrator.builder.system_fmu`: the whole-system FMU (``TrackingSystem.fmu``) from a
+  system description;
 - :mod:`~orchestrator.builder.documentation`: model metadata and ``documentation/index.html``;
 - :mod:`~orchestrator.builder.validation`: fmpy's validator, fmu-manipulation-toolbox's checker
   and a short run of each built FMU.

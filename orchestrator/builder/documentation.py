@@ -4,13 +4,15 @@ The metadata (author, version, license, copyright, generationTool) comes from
 ``pyproject.toml`` of the checkout being built, never from an installed copy, so an FMU states
 the version of the code it carries. The documentation page is generated from the FMU's *final*
 ``modelDescription.xml`` (ports, units, causality, defaults, ``min``/``max`` valid ranges,
-default experiment), from the slave class's docstring and from the matching ``docs/<part>.md``,
-so it cannot disagree with what the FMU declares. The page is self-contained: one HTML file,
-inline style, no script, no network link.
+default experiment), from the slave class's docstring and from the matching ``docs/<part>.md``
+(its Markdown rendered as headings, paragraphs, lists and tables), so it cannot disagree with
+what the FMU declares. The Python packages it says a host needs are those the code inside the
+FMU imports (:func:`python_requirements`), not a list written by hand. The page is
+self-contained: one HTML file, inline style, no script, no network link.
 """
 
 import ast
-import re
+import sys
 import tomllib
 import zipfile
 from html.parser import HTMLParser
@@ -20,9 +22,10 @@ from xml.etree import ElementTree
 from components.common.errors import BuildError
 from orchestrator.files.atomic import atomic_open
 from orchestrator.report.html import Column, HtmlReport
+from orchestrator.report.markdown_text import add_markdown
 
 __all__ = ["DOCUMENTATION_FILE", "project_metadata", "add_metadata", "documentation_page",
-           "document_fmu", "documentation_problems"]
+           "document_fmu", "documentation_problems", "python_requirements"]
 
 DOCUMENTATION_FILE = "documentation/index.html"
 _REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -114,26 +117,40 @@ def _slave_docstring(slave_file, model_name):
     return ""
 
 
-def _markdown_sections(text):
-    """Split Markdown into (heading, body) pairs at its ``#`` headings (body kept as text)."""
-    sections, heading, lines = [], None, []
-    for line in text.splitlines():
-        match = re.match(r"^(#{1,4})\s+(.*)$", line)
-        if match:
-            if heading is not None or any(l.strip() for l in lines):
-                sections.append((heading, "\n".join(lines).strip("\n")))
-            heading, lines = match.group(2).strip(), []
-        else:
-            lines.append(line)
-    sections.append((heading, "\n".join(lines).strip("\n")))
-    return [(h, b) for h, b in sections if h or b.strip()]
+def python_requirements(files):
+    """The packages outside Python's standard library that an FMU's code imports.
+
+    Parameters
+    ----------
+    files : iterable of (str, bytes)
+        The FMU's entries (name, content); its ``resources/**.py`` are read, every ``import``
+        at any depth counts, and the FMU's own modules (everything under ``resources/``) do
+        not.
+
+    Returns
+    -------
+    list of str
+        Top-level package names, sorted (``["numpy"]`` for every sonotrack FMU).
+    """
+    sources = {name: data for name, data in files
+               if name.startswith("resources/") and name.endswith(".py")}
+    own = {Path(name).relative_to("resources").parts[0].removesuffix(".py") for name in sources}
+    imported = set()
+    for name, data in sources.items():
+        for node in ast.walk(ast.parse(data, name)):
+            if isinstance(node, ast.Import):
+                imported |= {alias.name.split(".")[0] for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                imported.add(node.module.split(".")[0])
+    return sorted(imported - own - set(sys.stdlib_module_names))
 
 
 def _range(variable, bound):
     return variable.get(bound, "")
 
 
-def documentation_page(model_description, slave_file=None, notes_file=None):
+def documentation_page(model_description, slave_file=None, notes_file=None,
+                       requirements=("numpy",)):
     """Return ``documentation/index.html`` for an FMU, as a string.
 
     Parameters
@@ -143,7 +160,9 @@ def documentation_page(model_description, slave_file=None, notes_file=None):
     slave_file : path-like, optional
         The slave module; its class docstring says what the model computes.
     notes_file : path-like, optional
-        ``docs/<part>.md``, included section by section as plain text.
+        ``docs/<part>.md``, its Markdown rendered into the page.
+    requirements : sequence of str
+        The packages the FMU's code imports (:func:`python_requirements`).
     """
     root = ElementTree.fromstring(model_description)
     model = root.get("modelName")
@@ -183,22 +202,23 @@ def documentation_page(model_description, slave_file=None, notes_file=None):
 
     computes = report.section("What the model computes")
     docstring = _slave_docstring(slave_file, model) if slave_file is not None else ""
-    if docstring:
-        computes.preformatted(docstring)
+    if docstring:   # numpydoc text: its ``code`` read as Markdown's `code`
+        add_markdown(report, docstring.replace("``", "`"), level=2, section=computes)
     if notes_file is not None and Path(notes_file).is_file():
         computes.paragraph(f"From the project documentation ({Path(notes_file).name}):")
-        for heading, body in _markdown_sections(Path(notes_file).read_text(encoding="utf-8")):
-            sub = report.section(heading or model, level=3)
-            if body.strip():
-                sub.preformatted(body)
+        add_markdown(report, Path(notes_file).read_text(encoding="utf-8"), level=2,
+                     section=computes)
 
     stop = experiment.get("stopTime", "10.0") if experiment is not None else "10.0"
     step = experiment.get("stepSize", "0.01") if experiment is not None else "0.01"
     steps = max(10, int(round(float(stop) / float(step))))
     run = report.section("How to run it")
-    run.paragraph("Needs Python 3.11 with numpy (and scipy for some models) on the machine: "
-                  "the model's own code is inside the FMU (resources/), the repository is not "
-                  "needed. Linux x86-64 uses sonotrack's FMI binary; win64 uses pythonfmu's.")
+    packages = (f"with {', '.join(requirements)}" if requirements else
+                "(its standard library only)")
+    run.paragraph(f"Needs Python 3.11 {packages} on the machine (the packages the model's code "
+                  "imports): the model's own code is inside the FMU (resources/), the "
+                  "repository is not needed. Linux x86-64 uses sonotrack's FMI binary; win64 "
+                  "uses pythonfmu's.")
     run.paragraph("With FMPy:")
     run.preformatted(f"import fmpy\nresult = fmpy.simulate_fmu('{model}.fmu', "
                      f"stop_time={stop}, step_size={step})\nprint(result.dtype.names)")
@@ -278,7 +298,8 @@ def document_fmu(fmu_path, slave_file=None, notes_file=None, metadata=None):
     root = add_metadata(ElementTree.fromstring(text), metadata)
     description = (b'<?xml version="1.0" encoding="UTF-8"?>\n'
                    + ElementTree.tostring(root, encoding="utf-8", xml_declaration=False))
-    page = documentation_page(description, slave_file, notes_file)
+    page = documentation_page(description, slave_file, notes_file,
+                              python_requirements((i.filename, d) for i, d in entries))
     with (atomic_open(fmu_path, fsync=False) as stream,
           zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as archive):
         archive.writestr(_entry("modelDescription.xml"), description)
@@ -350,7 +371,10 @@ def documentation_problems(fmu_path):
     problems = [f"HTML: {e}" for e in parser.errors]
     problems += [f"HTML: unclosed <{tag}>" for tag in parser.stack]
     problems += [f"external reference: {e}" for e in parser.external]
-    rows = {row[0]: row for row in parser.rows if row}
+    rows = {}
+    for row in parser.rows:   # the port tables come first; the model's notes may name a port too
+        if row:
+            rows.setdefault(row[0], row)
     for variable in _variables(root):
         if variable.get("causality") not in ("input", "output", "parameter"):
             continue

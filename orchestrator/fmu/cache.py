@@ -23,9 +23,12 @@ The cache is ``$SONOTRACK_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/sonotrack``
 The cache is bounded (:func:`prune_cache`). A process that uses an entry holds a shared
 ``flock`` on ``<cache>/fmu-locks/<sha256>.lock`` from before it checks the entry until it exits
 (the kernel drops the lock when the process ends, also on SIGKILL), and touches that file's
-mtime on every use. Each time an entry is added, the least recently used entries beyond
-``$SONOTRACK_CACHE_MAX_FMUS`` (default :data:`MAX_CACHED_FMUS`) or beyond
-``$SONOTRACK_CACHE_MAX_BYTES`` unpacked bytes (default :data:`MAX_CACHED_BYTES`) are removed, but
+mtime on every use. A process forked from a holder (a local sweep's worker) shares its lock (one
+open file description) and keeps it while it lives; such workers end with the sweep's process
+(:mod:`orchestrator.sweep.engine`), so a killed sweep leaves no lock held. Each time an entry
+is added, the least recently used entries beyond ``$SONOTRACK_CACHE_MAX_FMUS`` (default
+:data:`MAX_CACHED_FMUS`) or beyond ``$SONOTRACK_CACHE_MAX_BYTES`` unpacked bytes (default
+:data:`MAX_CACHED_BYTES`) are removed, but
 only those whose lock the pruner can take exclusively, without waiting: an entry another process
 (or this one) uses is never removed, however old. A removed entry is renamed aside before it is
 deleted, so no process ever sees half of it; one unpacked again later is simply a new entry.

@@ -2,10 +2,13 @@
 
 libcosim (libcosimpy) runs in a child process. When it releases an execution it unloads the
 FMU binaries, and unloading a pythonfmu binary inside a Python process leaves that
-interpreter liable to crash later; a child process keeps the caller safe.
+interpreter liable to crash later; a child process keeps the caller safe. The child ends
+when the caller dies, however it dies (:func:`orchestrator.processes.die_with_parent`, armed
+before libcosim is imported), instead of stepping on for nobody.
 """
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -15,7 +18,14 @@ from components.common.errors import ConfigError, SimulationError
 
 __all__ = ["OBSERVERS", "run_libcosim_ssd"]
 
-_CHILD = textwrap.dedent('''
+# The child's first lines: ``python -c CODE PARENT_PID`` ends with its parent; the orchestrator
+# is imported from our own source tree, which then leaves the child's path.
+_SOURCE_ROOT = str(Path(__file__).resolve().parents[2])
+_TIE = (f"import sys; sys.path.insert(0, {_SOURCE_ROOT!r})\n"
+        "from orchestrator.processes import die_with_parent\n"
+        "die_with_parent(int(sys.argv[1])); sys.path.pop(0)\n")
+
+_CHILD = _TIE + textwrap.dedent('''
     import json, sys, time
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
@@ -105,8 +115,8 @@ def run_libcosim_ssd(ssd_path, step, stop_time, columns, observer="last_value"):
                               f"osp:FixedStepAlgorithm baseStepSize in its DefaultExperiment")
     job = {"ssd": str(Path(ssd_path)), "step": step, "columns": list(columns),
            "steps": int(round(stop_time / base_step)), "observer": observer}
-    completed = subprocess.run([sys.executable, "-c", _CHILD], input=json.dumps(job),
-                               capture_output=True, text=True)
+    completed = subprocess.run([sys.executable, "-c", _CHILD, str(os.getpid())],
+                               input=json.dumps(job), capture_output=True, text=True)
     if completed.returncode != 0:
         tail = completed.stderr.strip().splitlines()[-3:]
         raise SimulationError(f"libcosim run of {ssd_path} failed with status "

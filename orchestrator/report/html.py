@@ -22,7 +22,11 @@ API
 - :func:`embedded_image_sources` ``(html)``: the ``src`` of every ``<img>`` (what the tests
   use to check that every image is embedded data).
 
-Cells read as :func:`~orchestrator.report.document.cell` says; numbers are right-aligned.
+Cells read as :func:`~orchestrator.report.document.cell` says; numbers are right-aligned and
+a verdict cell carries its tone as its class (``<td class="pass">``), coloured by the page's
+stylesheet. The page opens with the document's summary (``<section id="summary">``: counts by
+verdict, headline findings) and a table of contents (``<nav id="contents">``) linking every
+section's ``id``; a long table is a ``<details>`` element; figures are numbered.
 
 Examples
 --------
@@ -42,8 +46,9 @@ from pathlib import Path, PurePath
 from components.common.errors import ConfigError
 from orchestrator.files.atomic import atomic_write_text
 
-from .document import (Bullets, Code, Column, Document, Figure, Link, Paragraph, Preformatted,
-                       Section, Strong, Table, Verdict, cell, inline_parts)
+from .document import (CONTENTS_ANCHOR, SUMMARY_ANCHOR, Bullets, Code, Column, Document, Figure,
+                       Link, Paragraph, Preformatted, Section, Strong, Table, Verdict, cell,
+                       inline_parts)
 
 __all__ = ["HtmlReport", "Section", "Column", "embedded_image_sources", "link", "png_data_uri",
            "render_html", "write_html"]
@@ -65,9 +70,20 @@ figure { margin: 1rem 0; }
 figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: .9rem; color: #444; }
 pre { background: #f5f5f5; padding: .6rem; overflow-x: auto; }
+code { font-size: .95em; background: #f3f3f3; padding: 0 .2em; border-radius: 3px; }
 .pass { color: #176317; font-weight: 600; }
 .fail { color: #a31515; font-weight: 600; }
 .warn { color: #8a5a00; font-weight: 600; }
+td.pass { background: #e7f4e7; }
+td.fail { background: #fbe6e6; }
+td.warn { background: #fdf3dc; }
+.summary { border: 2px solid #444; border-radius: 6px; padding: .2rem 1rem .6rem;
+           background: #fafafa; }
+.summary h2 { border: none; margin-top: .6rem; }
+.counts span { display: inline-block; margin-right: 1.2rem; font-size: 1.1rem; }
+nav.toc ol { margin: .2rem 0; }
+details { margin: .8rem 0; }
+details > summary { cursor: pointer; font-weight: 600; }
 """
 
 
@@ -177,28 +193,32 @@ def _cell(value, column):
 def _table(table):
     parts = ["<table>"]
     if table.caption:
-        parts.append(f"<caption>{html.escape(table.caption)}</caption>")
+        parts.append(f"<caption>{_inline(table.caption)}</caption>")
     parts.append("<thead><tr>" + "".join(f"<th>{html.escape(c.header)}</th>"
                                          for c in table.columns) + "</tr></thead><tbody>")
     for row in table.rows:
         parts.append("<tr>" + "".join(_cell(v, c) for v, c in zip(row, table.columns))
                      + "</tr>")
     parts.append("</tbody></table>")
+    if table.collapsed:
+        what = _inline(table.caption) if table.caption else "Table"
+        return (f"<details><summary>{what} ({len(table.rows)} rows; click to open)</summary>"
+                + "".join(parts) + "</details>")
     return "".join(parts)
 
 
-def _figure(figure, base_dir):
+def _figure(figure, base_dir, number):
     source = figure.source
     if isinstance(source, (str, PurePath)) and base_dir is not None \
             and not Path(source).is_absolute():
         source = Path(base_dir) / source
     uri = png_data_uri(source, dpi=figure.dpi)
     alt_text = html.escape(figure.alt or figure.caption, quote=True)
-    return (f'<figure><img src="{uri}" alt="{alt_text}">'
-            f"<figcaption>{html.escape(figure.caption)}</figcaption></figure>")
+    return (f'<figure id="figure-{number}"><img src="{uri}" alt="{alt_text}">'
+            f"<figcaption>Figure {number}. {_inline(figure.caption)}</figcaption></figure>")
 
 
-def _block(block, base_dir):
+def _block(block, base_dir, figures):
     if isinstance(block, Paragraph):
         attribute = f' class="{block.tone}"' if block.tone else ""
         return f"<p{attribute}>{_inline(block.content)}</p>"
@@ -209,14 +229,49 @@ def _block(block, base_dir):
     if isinstance(block, Table):
         return _table(block)
     if isinstance(block, Figure):
-        return _figure(block, base_dir)
+        figures.append(block)
+        return _figure(block, base_dir, len(figures))
     raise ConfigError(f"HTML report: unknown block {block!r}")
 
 
-def _section(section, base_dir):
+def _section(section, base_dir, figures):
     tag = f"h{section.level}"
-    return (f"<section><{tag}>{html.escape(section.heading)}</{tag}>"
-            + "".join(_block(b, base_dir) for b in section.blocks) + "</section>")
+    return (f'<section id="{html.escape(section.anchor, quote=True)}"><{tag}>'
+            f"{html.escape(section.heading)}</{tag}>"
+            + "".join(_block(b, base_dir, figures) for b in section.blocks) + "</section>")
+
+
+def _summary(summary):
+    """The summary box: counts by verdict, then the findings."""
+    if summary is None:
+        return ""
+    counts = "".join(f'<span class="{tone}">{count} {html.escape(label)}</span>'
+                     for label, count, tone in summary.counts)
+    findings = ("<ul>" + "".join(f"<li>{_inline(item)}</li>" for item in summary.findings)
+                + "</ul>") if summary.findings else ""
+    return (f'<section id="{SUMMARY_ANCHOR}" class="summary"><h2>Summary</h2>'
+            f'<p class="counts">{counts}</p>{findings}</section>')
+
+
+def _contents(document):
+    """The table of contents: the sections of level 2, each with its level-3 sections."""
+    listed = document.table_of_contents()
+    if not listed:
+        return ""
+    tree = []   # (heading, anchor, children)
+    for level, heading, anchor in listed:
+        if level == 2 or not tree:
+            tree.append((heading, anchor, []))
+        else:
+            tree[-1][2].append((heading, anchor, []))
+
+    def items(nodes):
+        return "<ol>" + "".join(
+            f'<li><a href="#{html.escape(anchor, quote=True)}">{html.escape(heading)}</a>'
+            + (items(children) if children else "") + "</li>"
+            for heading, anchor, children in nodes) + "</ol>"
+
+    return f'<nav id="{CONTENTS_ANCHOR}" class="toc"><h2>Contents</h2>{items(tree)}</nav>'
 
 
 def render_html(document, base_dir=None):
@@ -234,7 +289,9 @@ def render_html(document, base_dir=None):
     str
     """
     intro = f"<p>{_inline(document.intro)}</p>" if document.intro else ""
-    body = "".join(_section(section, base_dir) for section in document.sections)
+    figures = []
+    body = (_summary(document.summary) + _contents(document)
+            + "".join(_section(section, base_dir, figures) for section in document.sections))
     title = html.escape(document.title)
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{title}</title><style>{_STYLE}</style></head>"

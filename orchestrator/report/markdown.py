@@ -1,10 +1,13 @@
 """The Markdown rendering of a report (GitHub-flavoured), figures linked relatively.
 
 Renders the same :class:`~orchestrator.report.document.Document` as
-:mod:`~orchestrator.report.html`, block for block: a section is a ``##``..``####`` heading, a
-table a pipe table with its caption in italics above, a figure ``![alt](path)`` with its
-caption below, a verdict in bold. Cells read as :func:`~orchestrator.report.document.cell`
-says, the same text as in the HTML.
+:mod:`~orchestrator.report.html`, block for block: the summary (``## Summary``: counts by
+verdict in bold, the findings as a list) and a table of contents (``## Contents``, links to
+the headings' anchors, which :func:`~orchestrator.report.document.slug` makes the same as
+GitHub's) come first; a section is a ``##``..``####`` heading, a table a pipe table with its
+caption in italics above (a long one inside ``<details>``), a figure ``![alt](path)`` with
+its numbered caption below, a verdict in bold. Cells read as
+:func:`~orchestrator.report.document.cell` says, the same text as in the HTML.
 
 Escaping policy: strings are text, never markup. A ``<`` that would open an HTML tag and an
 ``&`` that would start an entity are written as entities, a ``|`` in a table cell as ``\\|``,
@@ -35,8 +38,8 @@ from urllib.parse import quote
 
 from orchestrator.files.atomic import atomic_write_text
 
-from .document import (Bullets, Code, Figure, Link, Paragraph, Preformatted, Strong, Table,
-                       Verdict, cell, inline_parts)
+from .document import (CONTENTS_ANCHOR, SUMMARY_ANCHOR, Bullets, Code, Figure, Link, Paragraph,
+                       Preformatted, Strong, Table, Verdict, cell, inline_parts)
 
 __all__ = ["render_markdown", "write_markdown"]
 
@@ -77,15 +80,20 @@ def _row(cells):
 
 
 def _table(table):
-    lines = [f"*{_text(_one_line(table.caption))}*", ""] if table.caption else []
+    caption = _one_line(_inline(table.caption)) if table.caption else ""
+    lines = [f"*{caption}*", ""] if caption and not table.collapsed else []
     lines.append(_row([_text(c.header) for c in table.columns]))
     lines.append("|" + "|".join("---" for _ in table.columns) + "|")
     for values in table.rows:
         lines.append(_row([_inline(cell(v, c)[0]) for v, c in zip(values, table.columns)]))
+    if table.collapsed:   # GitHub shows the summary line and opens the rows on a click
+        what = caption or "Table"
+        return (f"<details><summary>{what} ({len(table.rows)} rows; click to open)</summary>"
+                "\n\n" + "\n".join(lines) + "\n\n</details>")
     return "\n".join(lines)
 
 
-def _block(block):
+def _block(block, figures):
     if isinstance(block, Paragraph):
         return _inline(block.content)
     if isinstance(block, Bullets):
@@ -96,9 +104,11 @@ def _block(block):
     if isinstance(block, Table):
         return _table(block)
     if isinstance(block, Figure):
-        caption = _one_line(block.caption)
+        figures.append(block)
+        caption = _one_line(_inline(block.caption))
         alt = _one_line(block.alt or block.caption).replace("]", "\\]")
-        return f"![{_text(alt)}]({quote(block.link_target())})\n\n*{_text(caption)}*"
+        return (f"![{_text(alt)}]({quote(block.link_target())})\n\n"
+                f"*Figure {len(figures)}. {caption}*")
     raise TypeError(f"Markdown report: unknown block {block!r}")
 
 
@@ -124,10 +134,31 @@ def render_markdown(document, html_companion=None):
                                           f"{_inline(target)}.")
     if lead:
         chunks.append(lead)
+    chunks += _summary(document.summary) + _contents(document)
+    figures = []
     for section in document.sections:
         chunks.append(f"{'#' * section.level} {_text(section.heading)}")
-        chunks += [_block(block) for block in section.blocks]
+        chunks += [_block(block, figures) for block in section.blocks]
     return "\n\n".join(chunks) + "\n"
+
+
+def _summary(summary):
+    if summary is None:
+        return []
+    counts = " \u00b7 ".join(f"**{count} {_text(label)}**" for label, count, _ in summary.counts)
+    chunks = ["## Summary", counts]   # the heading's anchor is SUMMARY_ANCHOR
+    if summary.findings:
+        chunks.append("\n".join(f"- {_one_line(_inline(item))}" for item in summary.findings))
+    return chunks
+
+
+def _contents(document):
+    listed = document.table_of_contents()
+    if not listed:
+        return []
+    lines = [f"{'  ' * (level - 2)}- [{_text(heading)}](#{anchor})"
+             for level, heading, anchor in listed]
+    return ["## Contents", "\n".join(lines)]   # anchor: CONTENTS_ANCHOR
 
 
 def write_markdown(document, path, html_companion=None):

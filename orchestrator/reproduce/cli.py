@@ -13,8 +13,16 @@ def register_cli(subparsers):
     from .experiments import TABLES
     from .study import RUNS_PER_CELL
 
+    import argparse
+
     parser = subparsers.add_parser(
-        "reproduce", help="the paper's experiments as a Monte Carlo study beside its numbers")
+        "reproduce", help="the paper's experiments as a Monte Carlo study beside its numbers",
+        description="Run the paper's experiments (Tables 1-3, 6-9, its figures) as a Monte\n"
+                    "Carlo study and judge each claim of the paper; write reproduction.html/\n"
+                    ".md/.json and figures/. Resumes from finished runs (docs/reproduction.md).",
+        epilog="examples:\n  sonotrack reproduce\n  sonotrack reproduce --runs 4 --tables "
+               "table6,table7 --out runs/reproduce_quick",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="runs/reproduce",
                         help="report folder (default: runs/reproduce)")
     parser.add_argument("--runs", type=int, default=RUNS_PER_CELL,

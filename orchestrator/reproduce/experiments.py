@@ -44,7 +44,7 @@ TRACK_STOP_TIME = 40.0
 SEC62_SOURCE_START = (math.sqrt(0.5), math.sqrt(0.5))
 # Figs. 7-8 compare the curvature planner with rotate-then-go on both paths.
 SEC62_MODES = ("curvature", "rotate_then_go")
-# Tables 6-7 reproduce the paper's wheel figures only with a 0.40 m track (DESIGN.md errata):
+# Tables 6-7 reproduce the paper's wheel figures only with a 0.40 m track (docs/errata.md):
 # those cells run a robot whose planner and plant both have this track width.
 TABLE67_TRACK_WIDTH = 0.40
 
@@ -227,7 +227,7 @@ def configuration(forms=("as_built",)):
                     "exceed the traction and the wheels slip",
         "track_width": "0.289 m (Table 11) for every run; Tables 6-7 are also run with a "
                        f"{TABLE67_TRACK_WIDTH} m robot, the width the paper's wheel figures "
-                       "imply (DESIGN.md errata)",
+                       "imply (docs/errata.md)",
         "rates": "source and localizer 10 ms, planner, controllers and plant 20 ms "
                  "(scenarios/s_curve.toml); one localizer fix per 100 ms; results recorded "
                  "every 20 ms",

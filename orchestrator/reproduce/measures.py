@@ -16,7 +16,7 @@ __all__ = ["DEFINITIONS", "ENCODER_PPR", "NOMINAL_WHEEL_RADIUS", "SLIP_THRESHOLD
            "arrival_figures", "slip_figures", "wheel_profile", "tracking_figures",
            "first_heading_change"]
 
-ENCODER_PPR = 728               # counts per wheel revolution (DESIGN.md)
+ENCODER_PPR = 728               # counts per wheel revolution (docs/plant.md)
 NOMINAL_WHEEL_RADIUS = 0.06     # m; the robot's own conversion of counts to distance
 # A wheel "slips" while |slip ratio| exceeds 5 %: well above the 0.7-1.2 % peak of the rolling
 # contact at mu >= 0.1 (measured), well below a spinning wheel (slip ratio ~ 1).

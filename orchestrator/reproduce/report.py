@@ -20,9 +20,10 @@ from orchestrator.report.markdown import write_markdown
 
 from .statistics import CONFIDENCE, INCONCLUSIVE, NOT_SUPPORTED, SUPPORTED, Estimate, judge
 
-__all__ = ["Table", "Claim", "Comparison", "Figure", "Report"]
+__all__ = ["Table", "Claim", "Comparison", "Figure", "Report", "VERDICT_TONES"]
 
-_TONES = {SUPPORTED: "pass", NOT_SUPPORTED: "fail", INCONCLUSIVE: "warn"}
+# How each verdict is shown (the report's pass / fail / warn tones).
+VERDICT_TONES = _TONES = {SUPPORTED: "pass", NOT_SUPPORTED: "fail", INCONCLUSIVE: "warn"}
 
 
 def _estimate_text(estimate, fmt):
@@ -32,9 +33,39 @@ def _estimate_text(estimate, fmt):
     return estimate.text(fmt) + (f" ({estimate.missing} missing)" if estimate.missing else "")
 
 
+def _plain(value):
+    """Inline content (a verdict, or a list of text and verdicts) as plain text."""
+    if isinstance(value, Verdict):
+        return value.text
+    if isinstance(value, list) and any(isinstance(v, Verdict) for v in value):
+        return "".join(_plain(v) for v in value)
+    return value
+
+
 def _cell(value, fmt):
     """A table cell: an :class:`Estimate` as its text, anything else as the value itself."""
     return _estimate_text(value, fmt) if isinstance(value, Estimate) else value
+
+
+# Claims the summary names one by one, per verdict that is not "supported".
+_HEADLINES_PER_VERDICT = 5
+
+
+def _headlines(claims):
+    """The summary's findings: the claims not supported, then the inconclusive ones, a few
+    each, one line per claim, and how many more the claims tables hold."""
+    lines = []
+    for verdict in (NOT_SUPPORTED, INCONCLUSIVE):
+        chosen = [c for c in claims if c.verdict == verdict]
+        for claim in chosen[:_HEADLINES_PER_VERDICT]:
+            lines.append([Verdict(verdict, _TONES[verdict]),
+                          f": {claim.source}: {claim.claim} ({claim.condition}): "
+                          f"{claim.estimate.text('.3g')} {claim.unit}, needs "
+                          f"{claim.requirement()}"])
+        if len(chosen) > _HEADLINES_PER_VERDICT:
+            lines.append(f"... and {len(chosen) - _HEADLINES_PER_VERDICT} more {verdict} in "
+                         "Claims and verdicts.")
+    return lines or ["Every claim is supported."]
 
 
 @dataclass
@@ -58,10 +89,12 @@ class Table:
         return section
 
     def to_dict(self):
-        """JSON-able form."""
+        """JSON-able form (a cell of inline content as its text)."""
         return {"title": self.title,
                 "columns": [{"key": k, "header": h} for k, h, _ in self.columns],
-                "rows": json_ready(self.rows), "notes": list(self.notes)}
+                "rows": json_ready([{k: _plain(v) for k, v in row.items()}
+                                    for row in self.rows]),
+                "notes": list(self.notes)}
 
 
 @dataclass
@@ -204,22 +237,35 @@ class Report:
                            "), plus the localizer's noise seed:"])
         section.table(["parameter", "band", "justification"],
                       [[Code(t.parameter), t.band(), t.justification] for t in self.tolerances])
-        section = document.section("Claims and verdicts")
         counts = self.verdict_counts()
+        document.summarize([(verdict, counts.get(verdict, 0), _TONES[verdict])
+                            for verdict in (SUPPORTED, NOT_SUPPORTED, INCONCLUSIVE)],
+                           _headlines(self.claims))
+        section = document.section("Claims and verdicts")
         section.paragraph([
             f"Each claim is judged on the {level} % interval of the quantity in 'measure' (a "
             "mean paired difference between cells whose run i shares its draws, a mean per-run "
             "slope over all speeds, or a mean figure): ", Strong(SUPPORTED), " if the whole "
             "interval lies beyond the threshold on the claimed side, ", Strong(NOT_SUPPORTED),
             " if it lies wholly on the other side, ", Strong(INCONCLUSIVE), " if it straddles "
-            "the threshold. Totals: "
-            + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + "."])
-        section.table(["source", "claim", "condition", "measure", f"{level} % interval",
-                       "threshold", "paper", "verdict", "likely reason (where not supported)"],
-                      [[c.source, c.claim, c.condition, c.measure,
-                        f"{c.estimate.text('.4g')} {c.unit}".strip(), c.requirement(), c.paper,
-                        Verdict(c.verdict, _TONES[c.verdict]), c.likely_reason()]
-                       for c in self.claims])
+            "the threshold. An interval followed by '(N missing)' leaves out N runs of the cell "
+            "that gave no value (e.g. the robot never arrived). One table per verdict:"])
+        for verdict in (NOT_SUPPORTED, INCONCLUSIVE, SUPPORTED):
+            claims = [c for c in self.claims if c.verdict == verdict]
+            if claims:
+                section.table(["source", "claim", "condition", "measure",
+                               f"{level} % interval", "threshold", "paper", "verdict",
+                               "likely reason (where not supported)"],
+                              [[c.source, c.claim, c.condition, c.measure,
+                                f"{c.estimate.text('.4g')} {c.unit}".strip(), c.requirement(),
+                                c.paper, Verdict(c.verdict, _TONES[c.verdict]),
+                                c.likely_reason()] for c in claims],
+                              caption=f"Claims {verdict} ({len(claims)})")
+        section = document.section("Figures")
+        for figure in self.figures:
+            section.figure(figure.path, f"{figure.name}: {figure.caption}", alt=figure.name)
+        if not self.figures:
+            section.paragraph("No figures.")
         for table in self.tables.values():
             table.add_to(document.section(table.title))
         document.section("Every number of the paper beside the simulation").table(
@@ -227,11 +273,6 @@ class Report:
              f"simulated mean [{level} % interval]", Column("sim / paper", format=".4g")],
             [[c.table, c.row, c.quantity, c.paper, _estimate_text(c.estimate, ".4g"), c.ratio]
              for c in self.comparisons])
-        section = document.section("Figures")
-        for figure in self.figures:
-            section.figure(figure.path, f"{figure.name}: {figure.caption}", alt=figure.name)
-        if not self.figures:
-            section.paragraph("No figures.")
         document.section("Definitions").bullets([[Code(k), f": {v}"]
                                                  for k, v in self.definitions.items()])
         return document

@@ -9,7 +9,6 @@ interruption) recomputes nothing that is on disk.
 """
 
 import csv
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -149,7 +148,8 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
     found = {(row.get("cell"), row.get("index")): row for row in result.rows}
     for named in settings:
         row = found.get((named["cell"], named["index"]))
-        record = (_record(named["cell"], named["index"], named, row) if row is not None
+        record = (_record(named["cell"], named["index"], named, row, result.out_dir)
+                  if row is not None
                   else RunRecord(named["cell"], named["index"],
                                  {"status": "missing", "error": "no row in the sweep"}, {},
                                  "", named))
@@ -157,10 +157,12 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
     return study
 
 
-def _record(cell, index, point, row):
-    run_dir = row["run_dir"]
-    summary_path = Path(run_dir) / "summary.json"
-    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else dict(row)
+def _record(cell, index, point, row, sweep_dir):
+    from orchestrator.run.folder import read_summary
+
+    run_dir = str(Path(sweep_dir) / row["run_dir"])   # rows name it relative to the sweep
+    # read as every reader reads it: a run whose process is gone is "abandoned"
+    summary = read_summary(run_dir) or dict(row)
     ok = summary.get("status") == "ok" and (Path(run_dir) / "results.csv").is_file()
     data = read_results(run_dir) if ok else {}
     return RunRecord(cell, index, summary, data, run_dir, point)

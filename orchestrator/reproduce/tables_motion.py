@@ -201,7 +201,7 @@ def profile_tables(analysis, selected, paper):
     columns = [("quantity", "quantity", ""), ("sim040", "sim L=0.40", ".3f"),
                ("formula040", "formula L=0.40", ".3f"), ("sim0289", "sim L=0.289", ".3f"),
                ("formula0289", "formula L=0.289", ".3f"), ("paper", "paper", ".3f")]
-    note = ("Track width erratum (DESIGN.md): the paper's wheel figures need L = 0.40 m; the "
+    note = ("Track width erratum (docs/errata.md): the paper's wheel figures need L = 0.40 m; the "
             "robot's own L = 0.289 m (Table 11). sim: FGS-PD with feedforward, nominal "
             "friction, the planner's ramps (outer wheel at a_max = 0.4 m/s^2); the paper "
             "prints velocity / (1 s) as its acceleration. Wheel distances are the encoder's "

@@ -8,7 +8,9 @@ not others. Sec. 6.2's tracking test has bounds derived from the speeds
 
 from .experiments import (CONTROLLERS, FEEDFORWARD, FRICTIONS, PD_FORMS, SEC62_MODES,
                           t89_cell)
-from .report import Claim, Comparison, Table
+from orchestrator.report.document import Verdict
+
+from .report import VERDICT_TONES, Claim, Comparison, Table
 from .tables_motion import BETTER_MARGIN
 
 __all__ = ["BODY_LENGTH", "tracking_bounds", "controller_tables", "tracking_tables",
@@ -292,7 +294,10 @@ def condition_summary(claims):
     for (source, text), group in groups.items():
         if len(group) < 2:
             continue
-        verdicts = "; ".join(f"{c.condition}: {c.verdict}" for c in group)
+        # each verdict shown in its tone; the JSON keeps the text (Table.to_dict)
+        verdicts = [part for number, c in enumerate(group)
+                    for part in (("; " if number else "") + f"{c.condition}: ",
+                                 Verdict(c.verdict, VERDICT_TONES[c.verdict]))]
         depends = len({c.verdict for c in group}) > 1
         table.rows.append({"claim": f"{source}: {text}", "verdicts": verdicts,
                            "depends": "yes" if depends else "no"})

@@ -18,8 +18,12 @@ are named by the system description (:mod:`orchestrator.system.sonotrack`). The 
 - ``slip_time_s``: time with either wheel's |slip ratio| above :data:`SLIP_THRESHOLD`;
   ``max_slip_ratio``: largest |slip| of either wheel;
 - ``max_body_speed_m_s``: largest |plant.speed|;
-- ``stopped_safely``: at the end the body is slower than :data:`STOPPED_SPEED` and it was
-  never closer to the source than ``stop_distance / 2``.
+- ``source_speed_at_end_m_s``: the source's speed over the last two rows;
+- ``stopped_safely``: whether the robot came to rest without coming too close, asked only of
+  a run whose source has stopped (``source_speed_at_end_m_s`` below :data:`STOPPED_SPEED`):
+  then True when the body is slower than :data:`STOPPED_SPEED` at the end and was never
+  closer to the source than ``stop_distance / 2``. While the source still moves at the end
+  the robot is meant to follow it, not to stop, and the figure is None (``null``).
 """
 
 import math
@@ -100,6 +104,7 @@ def fault_summary(rows, faults=(), stop_distance=0.5):
     slip_time, max_slip, max_speed = 0.0, 0.0, 0.0
     active_time = {t: 0.0 for t in targets}
     rejected = min_distance = last_speed = wheel_stops = odometry_stops = None
+    source_tail = None   # the last two rows' (time, source x, source y)
     for chunk in rows.chunks(present):
         time = chunk["time"]
         # each row stands for the interval since the previous row
@@ -140,6 +145,9 @@ def fault_summary(rows, faults=(), stop_distance=0.5):
         if set(SONOTRACK.position_columns) <= have:
             low = float(source_distance(chunk).min())
             min_distance = low if min_distance is None else min(min_distance, low)
+            sx, sy = SONOTRACK.source_position
+            tail = np.column_stack([time[-2:], chunk[sx][-2:], chunk[sy][-2:]])
+            source_tail = tail if source_tail is None else np.vstack([source_tail, tail])[-2:]
 
     summary = {
         "faults": [{"kind": fault.kind, "target": target, "start_s": fault.start,
@@ -160,10 +168,21 @@ def fault_summary(rows, faults=(), stop_distance=0.5):
         # figures that need these columns are left out or empty, never guessed
         "not_recorded": missing,
     }
+    source_speed = _speed_at_end(source_tail)
+    if source_speed is not None:
+        summary["source_speed_at_end_m_s"] = source_speed
     if last_speed is not None and min_distance is not None:
-        summary["stopped_safely"] = bool(last_speed < STOPPED_SPEED
-                                         and min_distance > 0.5 * stop_distance)
+        moving = source_speed is not None and source_speed >= STOPPED_SPEED
+        summary["stopped_safely"] = None if moving else bool(
+            last_speed < STOPPED_SPEED and min_distance > 0.5 * stop_distance)
     return summary
+
+
+def _speed_at_end(tail):
+    """Speed [m/s] between the last two ``(time, x, y)`` rows; None with fewer rows."""
+    if tail is None or len(tail) < 2 or not tail[1, 0] > tail[0, 0]:
+        return None
+    return float(np.hypot(*(tail[1, 1:] - tail[0, 1:])) / (tail[1, 0] - tail[0, 0]))
 
 
 # The survival checks of issue 12 (docs/faults.md), with the planner defaults they fall back on.

@@ -81,20 +81,26 @@ class PlotRenderer:
         self.timings = {}
         self._log = tempfile.TemporaryFile()   # its stderr: never a pipe that could fill up
         # the same source tree as ours first on its path, whatever the working folder holds
+        # tied to us before the slow imports: a parent killed meanwhile ends it at once
         code = (f"import sys; sys.path.insert(0, {_SOURCE_ROOT!r}); "
+                f"from orchestrator.processes import die_with_parent; "
+                f"die_with_parent({os.getpid()}); "
                 f"from orchestrator.run.plot_renderer import _serve; sys.exit(_serve({os.getpid()}))")
         self._process = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
                                          stdout=subprocess.PIPE, stderr=self._log)
 
-    def render(self, results_csv, out_dir, max_rows):
+    def render(self, results_csv, out_dir, max_rows, context=None):
         """Draw the plots of ``results_csv`` into ``out_dir``; return the written paths.
 
         Waits until every figure is written or has failed. Raises :class:`PlotError` (one
-        line; its ``written`` lists what was drawn all the same) if any failed.
+        line; its ``written`` lists what was drawn all the same) if any failed. ``context``
+        (a :class:`~orchestrator.run.plots.PlotContext`) gives the titles and the stop
+        distance.
         """
         request = {"results_csv": str(Path(results_csv).resolve()),
                    "out_dir": str(Path(out_dir).resolve()), "max_rows": max_rows,
-                   "shares": [list(share) for share in self.shares]}
+                   "shares": [list(share) for share in self.shares],
+                   "context": context.to_dict() if context is not None else None}
         everything = ", ".join(sum(self.shares, ()))
         try:
             stdin, self._process.stdin = self._process.stdin, None   # communicate() won't flush
@@ -155,17 +161,9 @@ def _last_json_line(out):
 
 def _die_with_parent(parent_pid):
     """Be killed when the parent dies (Linux); elsewhere EOF on stdin ends the wait."""
-    if sys.platform.startswith("linux"):
-        try:
-            import ctypes
-            import signal
+    from orchestrator.processes import die_with_parent
 
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(1, int(signal.SIGKILL))   # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent_pid:   # the parent died before the signal was armed
-        os._exit(0)
+    die_with_parent(parent_pid)
 
 
 def _warm_up():
@@ -183,18 +181,18 @@ def _warm_up():
     fig.savefig(io.BytesIO(), dpi=110, format="png", pil_kwargs={"compress_level": 1})
 
 
-def _draw(data, out_dir, figures):
+def _draw(data, out_dir, figures, context):
     """(written paths, error text or None) of one share of the figures."""
     from orchestrator.run.plots import plot_run
 
     try:
-        return [str(p) for p in plot_run(data, out_dir, figures=figures)], None
+        return [str(p) for p in plot_run(data, out_dir, figures=figures, context=context)], None
     except Exception as error:   # any reason, in one line, to the parent
         text = " ".join(str(error).split()) or "(no message)"
         return [], f"plots {', '.join(figures)}: {type(error).__name__}: {text}"
 
 
-def _draw_shares(data, out_dir, shares):
+def _draw_shares(data, out_dir, shares, context=None):
     """Draw the first share here and each other one in a forked copy; collect the results."""
     forks = []
     for share in shares[1:]:
@@ -205,14 +203,14 @@ def _draw_shares(data, out_dir, shares):
             try:
                 os.close(read_end)
                 _die_with_parent(os.getppid())
-                written, error = _draw(data, out_dir, share)
+                written, error = _draw(data, out_dir, share, context)
                 os.write(write_end, json.dumps([written, error]).encode())
                 status = 0
             finally:
                 os._exit(status)
         os.close(write_end)
         forks.append((pid, read_end, share))
-    written, error = _draw(data, out_dir, shares[0])
+    written, error = _draw(data, out_dir, shares[0], context)
     errors = [error] if error else []
     for pid, read_end, share in forks:
         chunks = []
@@ -253,7 +251,8 @@ def _serve(parent_pid):
         print(json.dumps({"written": [], "errors": [f"plots {figures}: reading the results: "
                                                     f"{type(error).__name__}: {text}"]}))
         return 0
-    written, errors = _draw_shares(data, request["out_dir"], request["shares"])
+    written, errors = _draw_shares(data, request["out_dir"], request["shares"],
+                                   request.get("context"))
     times["done"] = time.time()
     print(json.dumps({"written": written, "errors": errors, "times": times}), flush=True)
     return 0

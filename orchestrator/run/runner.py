@@ -23,7 +23,19 @@ __all__ = ["BACKENDS", "RunResult", "run_scenario"]
 
 @dataclass
 class RunResult:
-    """What a run leaves: its summary and the paths of its files."""
+    """What a run leaves: its summary and the paths of its files, every path absolute.
+
+    Attributes
+    ----------
+    summary : dict
+        What ``summary.json`` holds.
+    out_dir, results_csv, summary_json : pathlib.Path
+        The run's folder and its two files (absolute, whatever folder the run was given as).
+    plots : list of pathlib.Path
+        The PNG files written (absolute).
+    plots_error : str or None
+        Why some plots could not be drawn (one line), if so.
+    """
 
     summary: dict
     out_dir: Path
@@ -43,7 +55,9 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     (see :mod:`orchestrator.run.folder`). The summary says ``"ok"`` only once the last step is
     done and ``results.csv`` is complete; a failure or a signal is written into it as soon as
     it is known (``"failed"`` or ``"interrupted"`` with ``error``), and a run that is killed
-    leaves ``"running"``. SIGINT and SIGTERM stop the run after the step in progress.
+    leaves ``"running"``, which readers report as ``"abandoned"`` once its process is gone
+    (:func:`orchestrator.run.folder.read_summary`). SIGINT and SIGTERM stop the run after the
+    step in progress.
 
     Parameters
     ----------
@@ -129,7 +143,9 @@ def _run(plan: RunPlan, folder, progress, renderer):
     from orchestrator.fmu.handle import FmuInstance
     from orchestrator.run.master import InstanceSpec, Link, Master
     from orchestrator.run.summary import RowTrace
+    from orchestrator.processes import process_record
     from orchestrator.run.signals import StopSignals
+    from orchestrator.system.sonotrack import SONOTRACK
 
     scenario, system, columns = plan.scenario, plan.system, plan.columns
     if plan.backend == "fmi":
@@ -158,6 +174,10 @@ def _run(plan: RunPlan, folder, progress, renderer):
         "master": master.algorithm,
         "base_step_s": scenario.base_step,
         "seed": scenario.seed,
+        "controller": SONOTRACK.controller_mode(system, plan.parameters),
+        # who writes this file: a reader takes "running" from a process that is gone as
+        # "abandoned" (orchestrator.run.folder)
+        "process": process_record(),
     }
     folder.start(summary)
 
@@ -248,13 +268,15 @@ def _run(plan: RunPlan, folder, progress, renderer):
         from orchestrator.run.plot_renderer import PlotError
 
         try:
-            written = renderer.render(folder.results_csv, folder.path, _PLOT_ROWS)
+            written = renderer.render(folder.results_csv, folder.path, _PLOT_ROWS,
+                                      _plot_context(plan))
         except PlotError as exc:
             written, plots_error = exc.written, str(exc)
             summary["plots_error"] = plots_error
         summary["plots"] = [path.name for path in written]
         folder.write_summary(summary)
-    result = RunResult(summary, folder.path, folder.results_csv, folder.summary_json, written,
+    result = RunResult(summary, folder.path.resolve(), folder.results_csv.resolve(),
+                       folder.summary_json.resolve(), [p.resolve() for p in written],
                        plots_error)
     if interrupted:
         raise RunInterrupted(f"{error}; results so far in {folder.results_csv} (summary "
@@ -262,6 +284,16 @@ def _run(plan: RunPlan, folder, progress, renderer):
     if error is not None:
         raise SimulationError(f"{error} (results so far in {folder.results_csv})")
     return result
+
+
+def _plot_context(plan):
+    """The scenario, controller law and stop distance the plots are titled and drawn with."""
+    from orchestrator.run.plots import PlotContext
+    from orchestrator.system.sonotrack import SONOTRACK
+
+    return PlotContext(getattr(plan.scenario, "name", ""),
+                       SONOTRACK.controller_mode(plan.system, plan.parameters),
+                       plan.stop_distance)
 
 
 def _non_finite_metrics(summary, error):

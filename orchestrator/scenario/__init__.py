@@ -31,7 +31,10 @@ Modules, one concept each:
   once;
 - :mod:`~orchestrator.scenario.model`: the validated :class:`Scenario`, built by
   :func:`scenario_from_dict`, and its input hash;
-- :mod:`~orchestrator.scenario.loading`: :func:`load_scenario`, a TOML file read and validated.
+- :mod:`~orchestrator.scenario.loading`: :func:`load_scenario`, a TOML file read and validated;
+- :mod:`~orchestrator.scenario.overrides`: ``--set`` and ``--stop-time`` from a command line,
+  validated like the file;
+- :mod:`~orchestrator.scenario.shipped`: the shipped scenarios, found by name from any folder.
 
 This ``__init__`` re-exports the public names, so ``from orchestrator.scenario import
 load_scenario`` is the stable import path.
@@ -40,7 +43,9 @@ load_scenario`` is the stable import path.
 from .loading import load_scenario
 from .locations import default_system_path
 from .model import Scenario, scenario_from_dict
+from .overrides import apply_overrides, parse_override, parse_value
 from .schema import DEFAULT_MAX_STEPS, MASTERS, SCHEMA, STEP_TOLERANCE, Field, parse_seconds
+from .shipped import find_scenario, shipped_scenarios
 from .system_checks import model_ranges
 
 __all__ = [
@@ -50,7 +55,12 @@ __all__ = [
     "Field",
     "SCHEMA",
     "Scenario",
+    "apply_overrides",
+    "find_scenario",
     "load_scenario",
+    "parse_override",
+    "parse_value",
+    "shipped_scenarios",
     "scenario_from_dict",
     "default_system_path",
     "model_ranges",

@@ -1,6 +1,6 @@
 """The sonotrack system as data: its FMU ports, instances, connections, parameters and steps.
 
-The port table follows DESIGN.md; :func:`sonotrack_system` turns it into a
+The port table is the contract between the FMUs (docs/system.md); :func:`sonotrack_system` turns it into a
 :class:`~orchestrator.ssp.SystemDescription`, and ``python -m orchestrator.ssp [path]``
 (:func:`main`) regenerates the committed ``fmus/SystemStructure.ssd`` from it when ports change.
 """
@@ -24,7 +24,7 @@ __all__ = [
     "main",
 ]
 
-# Ports per FMU model, after DESIGN.md: (name, kind, type, unit). Only ports whose unit the design
+# Ports per FMU model, the contract between the FMUs: (name, kind, type, unit). Only ports whose unit the design
 # fixes are listed; extra outputs of an FMU need no connector to be recorded by our master.
 FMU_PORTS = {
     "SoundSource": [

@@ -5,6 +5,12 @@ scheduler`` and ``workers`` single-threaded ``dask worker`` processes on 127.0.0
 process as on separate machines. The cluster test (``tests/integration/orchestrator/sweep/test_runs.py``) and the
 sweep benchmark (``benchmarks/sweep_scaling.py``) start theirs here.
 
+The cluster belongs to the process that starts it: its scheduler and workers end when that
+process dies, however it dies (each command is wrapped by
+:func:`orchestrator.processes.tied_command`, which arms Linux's parent-death signal before it
+runs ``dask``; a worker's nanny takes its worker process with it). Start it from the main
+thread: from another thread the commands are not tied (the signal would follow that thread).
+
 Examples
 --------
 >>> address, processes = start_cluster(Path("/tmp/work"))      # doctest: +SKIP
@@ -19,6 +25,7 @@ import time
 from pathlib import Path
 
 from components.common.errors import SimulationError
+from orchestrator.processes import tied_command
 
 __all__ = ["dask_command", "scheduler_address", "start_cluster", "stop_cluster"]
 
@@ -76,15 +83,16 @@ def start_cluster(work, workers=2, env=None, timeout=60.0):
     scheduler_file = work / "scheduler.json"
     common = {"cwd": work, "stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL,
               "env": env}
-    processes = [subprocess.Popen([dask_command(), "scheduler", "--host", "127.0.0.1",
-                                   "--port", "0", "--no-dashboard",
-                                   "--scheduler-file", str(scheduler_file)], **common)]
+    processes = [subprocess.Popen(tied_command([dask_command(), "scheduler", "--host",
+                                                "127.0.0.1", "--port", "0", "--no-dashboard",
+                                                "--scheduler-file", str(scheduler_file)]),
+                                  **common)]
     try:
         address = scheduler_address(scheduler_file, processes[0], timeout)
         for _ in range(workers):
-            processes.append(subprocess.Popen(
+            processes.append(subprocess.Popen(tied_command(
                 [dask_command(), "worker", address, "--nthreads", "1", "--no-dashboard",
-                 "--host", "127.0.0.1", "--local-directory", str(work / "dask")], **common))
+                 "--host", "127.0.0.1", "--local-directory", str(work / "dask")]), **common))
         with Client(address, timeout="30s") as client:
             client.wait_for_workers(workers, timeout=90)
     except BaseException:

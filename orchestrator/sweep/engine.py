@@ -16,11 +16,23 @@ whichever runs it:
   ``Client``; the workers keep their instances warm the same way.
 
 :func:`open_engine` picks one from the CLI's ``--scheduler`` / ``--workers``.
+
+A local engine's workers end when the sweep's process dies, however it dies (SIGKILL, the
+out-of-memory killer, a CI time-out): each worker arms Linux's parent-death signal (when the
+pool was started from the main thread, whose end is the process's) and watches a lifeline
+pipe that only the sweep's process holds open (:mod:`orchestrator.processes.lifetime`), so
+none is left holding the FMU cache's shared locks or the sweep's output. A worker's stdin is
+``/dev/null`` and its stdout goes to its stderr: the sweep's stdout carries the sweep's own
+report, and a caller reading it to the end waits for the sweep alone. A cluster's workers
+belong to the cluster: a killed client's tasks are the scheduler's to drop (see
+``docs/process_lifetime.md``).
 """
 
 import os
 import signal
 import socket
+import threading
+from pathlib import Path
 from urllib.parse import urlsplit
 
 from components.common.errors import ConfigError
@@ -37,7 +49,32 @@ def _check_workers(workers):
     return workers
 
 
-def _start_worker(warm_up_tasks, scratch):
+def _leave_the_callers_streams():
+    """stdin from /dev/null, stdout into stderr: the sweep's stdout is the sweep's alone."""
+    try:
+        devnull = os.open(os.devnull, os.O_RDONLY)
+        try:
+            os.dup2(devnull, 0)
+        finally:
+            os.close(devnull)
+        os.dup2(2, 1)
+    except OSError:   # no stderr to write to (a daemon's closed descriptors): leave them
+        pass
+
+
+def _start_worker(warm_up_tasks, scratch, parent_pid=None, lifeline_fd=None,
+                  death_signal=False):
+    """A pool worker's initializer: tie the worker to the sweep's process, then warm up."""
+    from orchestrator.processes import die_with_parent, end_this_process, watch_lifeline
+
+    if death_signal:
+        die_with_parent(parent_pid)
+    elif parent_pid is not None and os.getppid() != parent_pid:
+        end_this_process()
+    if lifeline_fd is not None:
+        watch_lifeline(lifeline_fd)
+    if parent_pid is not None:
+        _leave_the_callers_streams()
     # Ctrl-C belongs to the sweep's process, which stops the pool; a worker interrupted in the
     # middle of an FMU call would only turn it into an fmi2Fatal.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -49,6 +86,25 @@ def _start_worker(warm_up_tasks, scratch):
 
 def _process_id():
     return os.getpid()
+
+
+# A warm-up folder is named after the sweep's process: sonotrack-warm-up-<pid>-<random>.
+_SCRATCH_PREFIX = "sonotrack-warm-up-"
+
+
+def _remove_abandoned_scratch(folder):
+    """Remove the warm-up folders in ``folder`` of sweeps whose process is gone (killed while
+    its workers warmed up: they died with it, leaving their half-done warm-up run)."""
+    import shutil
+
+    from orchestrator.processes import GONE, process_state
+
+    host = socket.gethostname()
+    for path in Path(folder).glob(f"{_SCRATCH_PREFIX}*-*"):
+        owner = path.name[len(_SCRATCH_PREFIX):].split("-", 1)[0]
+        if owner.isdigit() and path.is_dir() and process_state(
+                {"pid": int(owner), "host": host}) == GONE:
+            shutil.rmtree(path, ignore_errors=True)
 
 
 def _pool_context():
@@ -108,6 +164,7 @@ class LocalEngine:
     def __init__(self, workers=None):
         self.workers = _check_workers(workers)
         self._pool = None
+        self._lifeline = None  # its end-of-file tells forked workers that we died
         self._scratch = None  # the workers' warm-up folder, removed on close
         self._ran = False
 
@@ -120,6 +177,10 @@ class LocalEngine:
         so its first-run costs overlap whatever this process does meanwhile (planning,
         hashing, dispatching). Dask is imported before the fork, so that the workers inherit
         it. Ignored if already started.
+
+        The workers end when this process dies, however it dies (see the module docstring);
+        Linux's parent-death signal is armed only when this is the main thread, since the
+        kernel sends it when the forking thread ends.
         """
         if self._pool is None:
             import tempfile
@@ -127,13 +188,22 @@ class LocalEngine:
 
             import dask.multiprocessing  # noqa: F401  (for run(), and inherited by the workers)
 
+            from orchestrator.processes import Lifeline
+
             warm_up = tuple(warm_up)
             if warm_up:
-                self._scratch = tempfile.mkdtemp(prefix="sonotrack-warm-up-")
+                _remove_abandoned_scratch(tempfile.gettempdir())
+                self._scratch = tempfile.mkdtemp(prefix=f"{_SCRATCH_PREFIX}{os.getpid()}-")
             self._ran = False
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=_pool_context(),
+            context = _pool_context()
+            forked = context.get_start_method() == "fork"
+            self._cut_lifeline()   # a former pool's, if it ended without a close
+            self._lifeline = Lifeline() if forked else None
+            tie = (os.getpid(), self._lifeline.read_fd if forked else None,
+                   forked and threading.current_thread() is threading.main_thread())
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=context,
                                              initializer=_start_worker,
-                                             initargs=(warm_up, self._scratch))
+                                             initargs=(warm_up, self._scratch, *tie))
             # with fork, the first submission forks every worker (before any thread starts)
             self._pool.submit(_process_id)
         return self
@@ -222,6 +292,7 @@ class LocalEngine:
             return
         _kill_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
+        self._cut_lifeline()
         self._remove_scratch()
 
     def close(self):
@@ -233,7 +304,14 @@ class LocalEngine:
         pool, self._pool = self._pool, None
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)
+        self._cut_lifeline()
         self._remove_scratch()
+
+    def _cut_lifeline(self):
+        # after the workers have exited: a worker still watching would end at once
+        lifeline, self._lifeline = self._lifeline, None
+        if lifeline is not None:
+            lifeline.close()
 
     def _remove_scratch(self):
         scratch, self._scratch = self._scratch, None

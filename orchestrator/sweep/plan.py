@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from components.common.errors import ConfigError
+from orchestrator.scenario.overrides import assignment_hint, parse_value
 from orchestrator.scenario.schema import SEED_MAX
 
 __all__ = ["PlannedRun", "expand_grid", "parse_assignment", "parse_seeds", "plan_runs",
-           "plan_scenarios"]
+           "plan_scenarios", "varied_parameters"]
 
 
 @dataclass
@@ -54,28 +55,18 @@ def parse_assignment(text):
     key, sep, values = text.partition("=")
     key = key.strip()
     instance, dot, name = key.partition(".")
-    if not sep or not (instance and dot and name) or not values.strip():
+    if not sep:
+        raise ConfigError(assignment_hint(text, example_values="0.2,0.3"))
+    if not (instance and dot and name) or not values.strip():
         raise ConfigError(f"--set {text!r}: expected instance.parameter=value[,value...], "
                           "e.g. planner.v_cruise=0.2,0.3")
-    parsed = [_value(v.strip()) for v in values.split(",") if v.strip()]
+    parsed = [parse_value(v.strip()) for v in values.split(",") if v.strip()]
     seen = []
     for value in parsed:
         if any(type(value) is type(s) and value == s for s in seen):
             raise ConfigError(f"--set {text!r}: value {value!r} is given twice")
         seen.append(value)
     return key, parsed
-
-
-def _value(text):
-    lowered = text.lower()
-    if lowered in ("true", "false"):
-        return lowered == "true"
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return text
 
 
 def parse_seeds(text):
@@ -210,7 +201,9 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
     out_dir : path-like
         The sweep's folder.
     settings : list of dict, optional
-        What names each run in the table (default: ``{"scenario": name, "seed": seed}``).
+        What names each run in the table (default: its scenario's name and seed, and every
+        parameter whose value is not the same in all the scenarios: a Monte Carlo row carries
+        each drawn value, see :func:`varied_parameters`).
     fmu_dir : path-like, optional
         Folder of the FMUs, if not beside the ``.ssd``.
     allow_outside : bool
@@ -234,7 +227,9 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
 
     scenarios = list(scenarios)
     if settings is None:
-        settings = [{"scenario": s.name, "seed": s.seed} for s in scenarios]
+        varied = varied_parameters(scenarios)
+        settings = [{"scenario": s.name, "seed": s.seed,
+                     **{k: s.parameters.get(k) for k in varied}} for s in scenarios]
     settings = list(settings)
     if len(settings) != len(scenarios):
         raise ConfigError(f"{len(settings)} settings for {len(scenarios)} scenarios")
@@ -248,6 +243,23 @@ def plan_scenarios(scenarios, out_dir, settings=None, fmu_dir=None, allow_outsid
             yield named, systems[scenario.system], scenario, None
 
     return _plan(runs(), out_dir, instance_parameters)
+
+
+def varied_parameters(scenarios):
+    """The parameters (``instance.parameter``) whose value differs between ``scenarios``, or
+    that some of them do not set, sorted.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as S
+    >>> varied_parameters([S(parameters={"plant.mass": 4.4, "planner.mode": "curvature"}),
+    ...                    S(parameters={"plant.mass": 4.6, "planner.mode": "curvature"})])
+    ['plant.mass']
+    """
+    keys = sorted({k for s in scenarios for k in s.parameters})
+    missing = object()
+    return [k for k in keys
+            if len({repr(s.parameters.get(k, missing)) for s in scenarios}) > 1]
 
 
 def _plan(runs, out_dir, check_parameters):

@@ -8,6 +8,7 @@ store, every run it finished; started again, it computes only the rest. A run th
 row with its ``status`` and ``error``; the sweep goes on.
 """
 
+import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,7 +28,8 @@ class SweepResult:
     ----------
     rows : list of dict
         One per run, in plan order: its settings, ``status`` (and ``error``), ``hash`` (its
-        key), ``run_dir`` and the summary's scalar figures.
+        key), ``run_dir`` (relative to ``out_dir``: ``runs/<hash>``, so the sweep folder can
+        be moved) and the summary's scalar figures.
     out_dir : pathlib.Path
         The sweep's folder.
     table_csv, table_json : pathlib.Path
@@ -48,13 +50,13 @@ class SweepResult:
     engine: str = ""
 
 
-def _row(run, summary):
+def _row(run, summary, out_dir):
     row = dict(run.settings)
     row["status"] = summary.get("status", "failed")
     if row["status"] != "ok":
         row["error"] = summary.get("error", "no reason recorded")
     row["hash"] = run.key
-    row["run_dir"] = str(run.run_dir)
+    row["run_dir"] = Path(os.path.relpath(run.run_dir, Path(out_dir).resolve())).as_posix()
     for name, value in summary.items():
         if name not in row and not isinstance(value, (dict, list)):
             row[name] = value
@@ -142,7 +144,7 @@ def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers
         if summary is None:
             pending.append(run)
         else:
-            table.add(run.key, _row(run, summary))
+            table.add(run.key, _row(run, summary, out_dir))
             result.reused += 1
     table.write()
     if pending:
@@ -157,7 +159,8 @@ def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers
 
         def on_result(key, summary):
             row = _row(by_key[key], summary if isinstance(summary, dict) else
-                       {"status": "failed", "error": f"worker returned {summary!r}"})
+                       {"status": "failed", "error": f"worker returned {summary!r}"},
+                       out_dir)
             result.computed += 1
             result.failed += row["status"] != "ok"
             table.add(key, row)

@@ -261,7 +261,9 @@ def warm_up(tasks, folder, warm=None):
             pass
         finally:
             shutil.rmtree(run_dir, ignore_errors=True)
-    try:  # the last worker out removes the folder (also when the sweep's process was killed)
+    # the last worker out removes the folder; a sweep killed meanwhile takes its workers with
+    # it, and the next local engine removes the folder (orchestrator.sweep.engine)
+    try:
         os.rmdir(folder)
     except OSError:
         pass

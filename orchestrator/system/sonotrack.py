@@ -7,9 +7,11 @@ the run layer:
 - which instance of ``fmus/SystemStructure.ssd`` plays which role (the instance names of
   :data:`orchestrator.ssp.SONOTRACK_INSTANCES`);
 - where the planner's stop distance comes from (:meth:`SonotrackSystem.stop_distance`);
-- the recorded columns the run summary reads (:mod:`orchestrator.run.summary`), and those a
-  run records whatever its scenario's ``outputs`` list
-  (:attr:`SonotrackSystem.recorded_columns`).
+- the recorded columns the run summary reads (:mod:`orchestrator.run.summary`), those the
+  plots draw (:mod:`orchestrator.run.plots`), and those a run records whatever its scenario's
+  ``outputs`` list (:attr:`SonotrackSystem.recorded_columns`);
+- which wheel controller law a run uses (:meth:`SonotrackSystem.controller_mode`), for the
+  titles of its plots.
 
 Examples
 --------
@@ -19,6 +21,8 @@ Examples
 ('plant.x', 'plant.y', 'source.x', 'source.y')
 >>> SONOTRACK.faults_active("localizer")
 'localizer.faults_active'
+>>> SONOTRACK.gain("left", "kp"), SONOTRACK.wheel_speed("right")
+('controller_left.kp', 'plant.wheel_speed_right')
 """
 
 from dataclasses import dataclass
@@ -46,6 +50,8 @@ class SonotrackSystem:
         The left and right wheel speed controllers.
     stop_distance_parameter : str
         The planner's parameter holding the distance [m] at which it stops.
+    controller_mode_parameter : str
+        The wheel controllers' parameter naming their control law.
     """
 
     source: str = "source"
@@ -54,6 +60,8 @@ class SonotrackSystem:
     plant: str = "plant"
     wheel_controllers: tuple = ("controller_left", "controller_right")
     stop_distance_parameter: str = "stop_distance"
+    controller_mode_parameter: str = "mode"
+    sides: tuple = ("left", "right")
 
     @property
     def robot_position(self):
@@ -105,6 +113,46 @@ class SonotrackSystem:
         """The planner's count of stops by its odometry check."""
         return f"{self.planner}.odometry_faults"
 
+    @property
+    def odometry_position(self):
+        """The robot's dead-reckoned position columns, ``(x, y)`` [m]."""
+        return f"{self.plant}.odom_x", f"{self.plant}.odom_y"
+
+    @property
+    def robot_heading(self):
+        """The robot's true heading [rad]."""
+        return f"{self.plant}.heading"
+
+    def wheel_speed(self, side):
+        """The wheel speed the encoder measures (counts over a window) [m/s]."""
+        return f"{self.plant}.wheel_speed_{side}"
+
+    def rim_speed(self, side):
+        """The wheel's true rim speed [m/s]."""
+        return f"{self.plant}.rim_speed_{side}"
+
+    def wheel_reference(self, side):
+        """The planner's speed reference for that wheel [m/s]."""
+        return f"{self.planner}.v_ref_{side}"
+
+    def controller(self, side):
+        """The wheel controller instance of ``side`` (``left`` or ``right``)."""
+        return self.wheel_controllers[self.sides.index(side)]
+
+    def gain(self, side, name):
+        """A scheduled gain (``kp`` or ``kd``) of the controller of ``side``."""
+        return f"{self.controller(side)}.{name}"
+
+    @property
+    def gain_columns(self):
+        """``kp`` and ``kd`` of both controllers (the gains plot reads them)."""
+        return tuple(self.gain(side, name) for side in self.sides for name in ("kp", "kd"))
+
+    @property
+    def fix_columns(self):
+        """The localizer's latest fix: distance [m], bearing [rad], valid."""
+        return tuple(f"{self.localizer}.{name}" for name in ("distance", "bearing", "valid"))
+
     def faults_active(self, instance):
         """The column saying that a fault of ``instance`` is active (> 0)."""
         return f"{instance}.faults_active"
@@ -113,13 +161,50 @@ class SonotrackSystem:
     def recorded_columns(self):
         """Columns a run records whatever its scenario lists, if the system has them.
 
-        The summary's figures and the plots read them; the order is that of ``results.csv``.
+        The summary's figures and the plots read them; the order is that of ``results.csv``
+        (the gains and true rim speeds last: the plots need them, the summary does not).
         """
         return (self.source_position + self.robot_position
-                + (f"{self.plant}.heading", self.body_speed) + self.wheel_slips
+                + (self.robot_heading, self.body_speed) + self.wheel_slips
                 + (self.fix_attempts, self.fix_status, self.rejected_fixes,
                    self.faults_active(self.localizer), self.faults_active(self.source),
-                   self.faults_active(self.plant)))
+                   self.faults_active(self.plant))
+                + self.gain_columns + tuple(self.rim_speed(side) for side in self.sides))
+
+    def parameter(self, system, parameters, instance, name):
+        """A parameter's value in a run: the run's, else the FMU's start value, else None.
+
+        Parameters
+        ----------
+        system : orchestrator.system.System
+            The run's system.
+        parameters : dict of str to dict
+            The run's parameter values per instance
+            (:func:`orchestrator.run.parameters.instance_parameters`).
+        instance, name : str
+            The instance and its parameter.
+        """
+        values = parameters.get(instance, {})
+        if name in values:
+            return values[name]
+        try:
+            component = system.component(instance)
+        except ConfigError:
+            return None
+        for variable in component.model_description.modelVariables:
+            if variable.name == name:
+                return variable.start
+        return None
+
+    def controller_mode(self, system, parameters):
+        """The wheel controllers' law in a run (``fgs_pd``, ``pid``, ``pd``), as one text.
+
+        ``"left-law / right-law"`` when the two differ; ``""`` without controllers.
+        """
+        modes = [self.parameter(system, parameters, c, self.controller_mode_parameter)
+                 for c in self.wheel_controllers]
+        modes = [str(m) for m in dict.fromkeys(modes) if m is not None]
+        return " / ".join(modes)
 
     def stop_distance(self, system, parameters):
         """The planner's stop distance [m] in a run.
@@ -139,18 +224,8 @@ class SonotrackSystem:
         -------
         float
         """
-        name = self.stop_distance_parameter
-        planner = parameters.get(self.planner, {})
-        if name in planner:
-            return float(planner[name])
-        try:
-            component = system.component(self.planner)
-        except ConfigError:
-            return 0.0
-        for variable in component.model_description.modelVariables:
-            if variable.name == name and variable.start is not None:
-                return float(variable.start)
-        return 0.0
+        value = self.parameter(system, parameters, self.planner, self.stop_distance_parameter)
+        return 0.0 if value is None else float(value)
 
 
 SONOTRACK = SonotrackSystem()

@@ -83,3 +83,67 @@ def test_a_plot_that_cannot_be_drawn_is_reported_and_recorded(fmu_dir, tmp_path,
     assert "unknown plot missing.png" in summary["plots_error"]
     assert summary["plots"] == ["gains.png", "localizer.png"]
     assert sorted(p.name for p in out.glob("*.png")) == ["gains.png", "localizer.png"]
+
+
+def test_a_shipped_scenario_by_name_from_any_folder_with_stop_time_set_and_compare(
+        fmu_dir, tmp_path, monkeypatch, capsys):
+    """``run straight --stop-time 1 --set planner.v_cruise=0.2`` from an empty folder, then
+    ``compare`` against the same run at the scenario's own cruise speed."""
+    import numpy as np
+
+    from orchestrator.cli import main
+    from orchestrator.run.results import read_results
+
+    monkeypatch.chdir(tmp_path)
+    common = ["--stop-time", "1", "--fmu-dir", str(fmu_dir), "--no-plots", "--quiet"]
+    assert main(["run", "straight", *common, "--set", "planner.v_cruise=0.2",
+                 "--out", "slow"]) == 0
+    printed = capsys.readouterr().out
+    assert "  final_distance_to_source_m " in printed and "(stop_distance_m 0.5)" in printed
+    assert "planner.v_cruise = 0.2" in printed
+    assert main(["run", "straight.toml", *common, "--out", "cruise"]) == 0
+    capsys.readouterr()
+    slow, cruise = (json.loads((tmp_path / n / "summary.json").read_text()) for n in
+                    ("slow", "cruise"))
+    assert slow["sim_time_s"] == cruise["sim_time_s"] == 1.0 and slow["steps"] == 100
+    # the reference the planner ramps to is the cruise speed given, 0.2 against 0.3 m/s
+    for name, cruise_speed in (("slow", 0.2), ("cruise", 0.3)):
+        data = read_results(tmp_path / name / "results.csv")
+        top = max(data["planner.v_ref_left"].max(), data["planner.v_ref_right"].max())
+        assert top == pytest.approx(cruise_speed, abs=0.02), name
+    assert main(["compare", "slow", "cruise", "--out", "cmp"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split() == ["slow", "cruise"]
+    table = (tmp_path / "cmp" / "comparison.md").read_text(encoding="utf-8")
+    assert (f"| final_distance_to_source_m | {slow['final_distance_to_source_m']:.4g} | "
+            f"{cruise['final_distance_to_source_m']:.4g} |") in table
+    assert np.isclose(float(out.split("final_distance_to_source_m")[1].split()[0]),
+                      slow["final_distance_to_source_m"], rtol=1e-3)
+
+
+def test_info_lists_every_variable_the_model_description_declares(fmu_dir, capsys):
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    from orchestrator.cli import main
+
+    path = fmu_dir / "WheelController.fmu"
+    assert main(["info", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    with zipfile.ZipFile(path) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+    assert lines[0] == f"model: {root.get('modelName')}"
+    table = lines[lines.index("") + 1:]
+    assert table[0].split() == ["name", "causality", "type", "unit", "start", "range",
+                                "description"]
+    variables = root.find("ModelVariables")
+    assert len(table) - 1 == len(variables)
+    for line, variable in zip(table[1:], variables):
+        typed = variable[0]
+        words = line.split()
+        assert words[:3] == [variable.get("name"), variable.get("causality"), typed.tag]
+        if typed.get("unit"):
+            assert words[3] == typed.get("unit")
+        if typed.get("min") is not None:
+            assert f"[{float(typed.get('min')):.6g}, {float(typed.get('max')):.6g}]" in line
+        assert line.endswith(" ".join(variable.get("description", "").split()))

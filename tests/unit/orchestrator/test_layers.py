@@ -26,8 +26,8 @@ PACKAGES = ("orchestrator", "components")
 
 #: Bottom to top. A layer is ``components``, the package ``orchestrator`` itself (its
 #: ``__init__``), or the subpackage or top-level module ``orchestrator.<name>``.
-LAYERS = ("components", "orchestrator", "files", "report", "ssp", "fmu", "system", "scenario",
-          "hosts", "builder", "run", "sweep", "verify", "reproduce", "cli")
+LAYERS = ("components", "orchestrator", "files", "processes", "report", "ssp", "fmu", "system",
+          "scenario", "hosts", "builder", "run", "sweep", "verify", "reproduce", "cli")
 
 MAX_LINES = 500
 

@@ -15,7 +15,7 @@ from tests.support.fmu_checks import run_isolated, same_bits, state_round_trip
 pytestmark = pytest.mark.integration
 
 # Table 6 of the paper (2 m at 45 deg right, V = 0.3 m/s), as printed; track width 0.40 m per
-# the errata in DESIGN.md.
+# the errata in docs/errata.md.
 TABLE6 = {"radius": 1.414, "v_left": 0.342, "v_right": 0.258, "s_left": 2.528, "s_right": 1.9}
 STEP = 0.02
 

@@ -1,5 +1,6 @@
 """Every built FMU carries its metadata and a documentation page that matches its ports."""
 
+import re
 import tomllib
 import zipfile
 from xml.etree import ElementTree
@@ -44,6 +45,32 @@ def test_documentation_lists_every_port_and_is_self_contained(fmu_paths, name):
     assert "ecos simulate" in page and "fmi2DoStep" in page
     for variable in root.find("ModelVariables"):
         assert variable.get("name") in page
+    # the model's docs page rendered, not shown as raw Markdown
+    body = page.split('id="what-the-model-computes"', 1)[1]
+    prose = re.sub(r"<code>.*?</code>|<pre>.*?</pre>", "", body, flags=re.S)
+    assert "<h3" in body and "<p>" in body and "\n## " not in body
+    assert "`" not in prose and "](" not in prose and "**" not in prose
+
+
+@pytest.mark.parametrize("name", sorted(FMU_PACKAGES))
+def test_documentation_states_the_packages_the_fmu_code_imports(fmu_paths, name):
+    """The reference: every import statement of the FMU's own Python, found by a regex."""
+    import re
+    import sys
+
+    with zipfile.ZipFile(fmu_paths[name]) as archive:
+        page = archive.read(DOCUMENTATION_FILE).decode("utf-8")
+        sources = [archive.read(n).decode("utf-8") for n in archive.namelist()
+                   if n.startswith("resources/") and n.endswith(".py")]
+        own = {n.split("/")[1].removesuffix(".py") for n in archive.namelist()
+               if n.startswith("resources/")}
+    statement = (r"^\s*(?:import\s+([A-Za-z_]\w*)[\w.]*\s*(?:,|as\b|$)"
+                 r"|from\s+([A-Za-z_]\w*)[\w.]*\s+import\b)")
+    imported = {a or b for text in sources for a, b in re.findall(statement, text, flags=re.M)}
+    outside = sorted(imported - own - set(sys.stdlib_module_names))
+    assert outside == ["numpy"]
+    needs = page.split('id="how-to-run-it"', 1)[1]   # the models' notes may cite scipy tests
+    assert "Needs Python 3.11 with numpy on the machine" in needs and "scipy" not in needs
 
 
 def _with_page(source, target, edit):

@@ -11,7 +11,7 @@ import pytest
 
 from orchestrator.report.html import embedded_image_sources
 from orchestrator.reproduce import reproduce
-from tests.support.html_render import ChromiumUnavailable, render_image_count
+from tests.support.html_render import ChromiumUnavailable, inspect_report
 
 pytestmark = pytest.mark.integration
 
@@ -92,7 +92,7 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
     assert not [s for s in _strings(data) if s.startswith("/")]
     markdown = (out / "reproduction.md").read_text()
     assert "](figures/fig07_straight_curvature.png)" in markdown
-    assert markdown.index("Configuration and assumptions") < markdown.index("Claims")
+    assert markdown.index("## Configuration and assumptions") < markdown.index("## Claims")
     assert "feedforward" in markdown.split("## Claims")[0]
 
 
@@ -103,11 +103,18 @@ def test_html_report_shows_every_figure(study):
     assert len(sources) == len(FIGURES)
     assert all(s.startswith("data:image/png;base64,") for s in sources)
     assert not re.search(r'(src|href)="(/|https?:)', page.read_text())
+    assert "`" not in page.read_text()   # no raw markup for readers
     try:
-        loaded, total = render_image_count(page)
+        seen = inspect_report(page, screenshot=out / "reproduction.png")
     except ChromiumUnavailable as exc:
         pytest.skip(f"images are embedded data (checked); no browser render: {exc}")
-    assert (loaded, total) == (len(FIGURES), len(FIGURES))
+    assert seen["images"] == [len(FIGURES), len(FIGURES)]
+    # the answer first: verdict counts and headline claims above everything else
+    assert seen["summary_top"] is not None and seen["summary_top"] < 300
+    for verdict, count in report.verdict_counts().items():
+        assert f"{count} {verdict}" in seen["summary_text"]
+    assert seen["contents"] and seen["broken_anchors"] == []
+    assert seen["verdict_cells"] >= len(report.claims) and seen["unclassed_verdicts"] == []
 
 
 def test_a_second_call_reuses_every_finished_run(study, fmu_dir):

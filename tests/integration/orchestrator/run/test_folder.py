@@ -19,6 +19,8 @@ import pytest
 from orchestrator.run.folder import read_summary
 from orchestrator.run.plots import PLOT_FILES
 from orchestrator.run.results import count_rows, read_results
+from tests.support.process_group import (kill_group, pause_env, read_to_eof, wait_for_stopped,
+                                         wait_until_gone)
 
 pytestmark = pytest.mark.integration
 
@@ -80,7 +82,8 @@ def _check_after_kill(out, returncode, old):
     elif "summary.json" in now:
         stale = [name for name, stamp in now.items() if old.get(name) == stamp]
         assert stale == [], f"older run's files beside a new summary: {stale}"
-        assert summary["status"] in ("running", "ok")
+        # a killed run's file says running; its process is gone, so it reads as abandoned
+        assert summary["status"] in ("abandoned", "ok")
     if (out / "results.csv").exists() and (out / "results.csv").stat().st_size:
         data = read_results(out / "results.csv", ["time", "plant.x"])
         assert len(data["time"]) == count_rows(out / "results.csv")
@@ -213,3 +216,37 @@ def test_a_failed_run_says_failed_and_keeps_its_rows(fmu_dir, tmp_path):
     assert summary["status"] == "failed" and "fmi2Error" in summary["error"]
     assert summary["sim_time_s"] == pytest.approx(2.5)
     assert count_rows(tmp_path / "run" / "results.csv") == 126  # t = 0, 0.02, ..., 2.5
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process states from /proc")
+def test_a_killed_run_reads_back_as_abandoned(fmu_dir, tmp_path):
+    """kill -9 of ``sonotrack run`` while it steps: its file still says running, and every
+    reader takes it as abandoned, naming the process; its renderer (warming up) ends too."""
+    out = tmp_path / "killed"
+    # the run stops itself as it opens results.csv: its summary already says running
+    process = subprocess.Popen(
+        [sys.executable, "-m", "orchestrator.cli", "run", str(_scenario(tmp_path, 5.0)),
+         "--out", str(out), "--fmu-dir", str(fmu_dir), "--quiet"], cwd=REPO,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+        env=pause_env("open */killed/results.csv 1"))
+    try:
+        assert wait_for_stopped(process.pid, process=process) == [process.pid]
+        written = json.loads((out / "summary.json").read_text())
+        assert written["status"] == "running"
+        assert written["process"]["pid"] == process.pid
+        assert read_summary(out)["status"] == "running"   # stopped, not dead: still running
+        os.kill(process.pid, signal.SIGKILL)
+        process.wait(timeout=30)
+        elapsed, left = wait_until_gone(process.pid, 3.0)
+        assert left == [], f"still running {elapsed:.1f} s after the kill: {left}"
+        assert read_to_eof(process.stdout, 1.0) is not None
+        assert read_to_eof(process.stderr, 1.0) is not None
+    finally:
+        kill_group(process.pid)
+        if process.poll() is None:
+            process.kill()
+        process.wait(timeout=30)
+    assert json.loads((out / "summary.json").read_text())["status"] == "running"
+    summary = read_summary(out)
+    assert summary["status"] == "abandoned"
+    assert f"pid {process.pid} on " in summary["error"]

@@ -51,6 +51,19 @@ def test_short_closed_loop_run_follows_the_source(fmu_dir, tmp_path):
         assert (result.out_dir / name).stat().st_size > 10_000
 
 
+def test_every_path_of_the_result_is_absolute_for_a_relative_folder(fmu_dir, tmp_path,
+                                                                    monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run_scenario(_scenario(0.2, 0.01), "relative/run", progress=False,
+                          fmu_dir=fmu_dir)
+    paths = [result.out_dir, result.results_csv, result.summary_json, *result.plots]
+    assert len(result.plots) == 4
+    assert all(p.is_absolute() and p.exists() for p in paths)
+    assert result.out_dir == tmp_path / "relative" / "run"
+    # the summary names the controller law the plots are titled with (the FMU's default)
+    assert result.summary["controller"] == "fgs_pd"
+
+
 def test_a_killed_run_leaves_a_readable_csv(fmu_dir, tmp_path):
     scenario_file = tmp_path / "long.toml"
     scenario_file.write_text(

@@ -18,11 +18,12 @@ from orchestrator.scenario import load_scenario
 from orchestrator.sweep import plan_runs, sweep
 from orchestrator.sweep.runs import _warm_up_tasks
 from orchestrator.sweep.worker import RunTask, WarmInstances, run_task, warm_up
+from tests.support.process_group import pause_env, wait_for_stopped
 
 pytestmark = pytest.mark.integration
 
-# Figures that depend on the machine's speed, not on the simulation.
-_TIMING = {"wall_time_s", "realtime_factor", "run_dir"}
+# Figures that depend on the machine's speed or on the process that ran, not on the simulation.
+_TIMING = {"wall_time_s", "realtime_factor", "run_dir", "process"}
 
 
 def _short(stop_time=2.0):
@@ -50,7 +51,9 @@ def test_sweep_runs_each_combination_once_and_resumes(fmu_dir, tmp_path):
     assert json.loads(first.table_json.read_text()) == first.rows
 
     # a summary cut short by a kill is not a finished run: it is computed again, no crash
-    summary = Path(first.rows[1]["run_dir"]) / "summary.json"
+    # each row names its run folder relative to the sweep folder, which can then be moved
+    assert [r["run_dir"] for r in first.rows] == [f"runs/{r['hash']}" for r in first.rows]
+    summary = tmp_path / first.rows[1]["run_dir"] / "summary.json"
     summary.write_text(summary.read_text()[:40])
     resumed = sweep(base, grid, tmp_path, fmu_dir=fmu_dir, workers=2, progress=False)
     assert (resumed.computed, resumed.reused) == (1, 1)
@@ -247,8 +250,9 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
         first = run_many(draws, tmp_path / "mc", fmu_dir=fmu_dir, engine=engine, progress=False)
         second = run_many(draws + [base.with_overrides(seed=3)], tmp_path / "mc", fmu_dir=fmu_dir,
                           engine=engine, progress=False)
-    assert [(r["scenario"], r["seed"], r["status"]) for r in first.rows] == [
-        ("static_case1", 1, "ok"), ("static_case1", 2, "ok")]
+    # a Monte Carlo row carries the value drawn for it
+    assert [(r["scenario"], r["seed"], r["plant.mass"], r["status"]) for r in first.rows] == [
+        ("static_case1", 1, 4.4, "ok"), ("static_case1", 2, 4.6, "ok")]
     assert (second.computed, second.reused) == (1, 2)
     assert second.rows[:2] == first.rows
 
@@ -266,18 +270,14 @@ def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
     command = [sys.executable, "-m", "orchestrator.cli", "sweep", str(scenario),
                "--seeds", "1..8", "--workers", "1", "--out", str(out), "--fmu-dir",
                str(fmu_dir), "--quiet"]
+    # The sweep's process stops itself as it starts its third table write, when the second
+    # (with at least one finished row) is whole on disk: the kill lands while the sweep runs
+    # however fast the machine is (polling for a first row could miss a sweep that fast).
     process = subprocess.Popen(command, cwd=REPO_ROOT, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL, start_new_session=True)
+                               stderr=subprocess.DEVNULL, start_new_session=True,
+                               env=pause_env("open */.sweep.json.*.partial 3"))
     try:
-        deadline = time.monotonic() + 240
-        finished = []
-        while not finished and time.monotonic() < deadline and process.poll() is None:
-            time.sleep(0.1)
-            try:
-                finished = json.loads((out / "sweep.json").read_text())
-            except (OSError, ValueError):  # not written yet (never half-written: asserted below)
-                finished = []
-        assert process.poll() is None, "the sweep ended before it could be killed"
+        assert wait_for_stopped(process.pid, timeout=240, process=process) == [process.pid]
         os.killpg(process.pid, signal.SIGKILL)  # the sweep and its worker process
         process.wait(timeout=30)
     finally:

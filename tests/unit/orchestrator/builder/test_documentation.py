@@ -59,3 +59,16 @@ def test_page_shows_ranges_and_direct_dependencies_from_the_xml():
     assert "<td>u</td><td>Real</td><td>m</td><td>0.5</td><td>0</td><td>2</td>" in page
     assert "<td>y</td><td>Real</td><td>m</td><td></td><td></td><td></td><td>none</td>" in page
     assert "<td>z</td><td>Real</td><td>m</td><td></td><td></td><td></td><td>u</td>" in page
+
+
+def test_requirements_are_the_imports_outside_the_stdlib_and_the_fmu_itself():
+    from orchestrator.builder.documentation import python_requirements
+
+    files = [("resources/Plant.py", b"import numpy as np\nfrom _own.plant import core\n"),
+             ("resources/_own/plant/core.py",
+              b"import math, json\ndef f():\n    import scipy.signal\n"
+              b"    from . import sibling\n"),
+             ("resources/_own/__init__.py", b""), ("modelDescription.xml", b"<x/>"),
+             ("resources/notes.txt", b"import pandas")]   # not Python: not read
+    assert python_requirements(files) == ["numpy", "scipy"]
+    assert python_requirements(files[2:]) == []

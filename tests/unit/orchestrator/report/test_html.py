@@ -148,3 +148,60 @@ def test_user_text_is_escaped_in_every_place_of_a_document(tmp_path):
     assert '<a href="sub/a b.json">' in page and '<td class="warn">' in page
     # the figure was read relative to the page's folder and embedded
     assert embedded_image_sources(page) == [png_data_uri(_png(2, 2))]
+
+
+def _answering_report(tmp_path, rows=30):
+    """A report as the studies write one: a summary, sections, a long table with a verdict
+    column, figures."""
+    document = Document("Study", intro="What was checked.")
+    document.summarize([("passed", rows - 2, "pass"), ("warnings", 1, "warn"),
+                        ("failed", 1, "fail")],
+                       ["**check_7** failed: `kp` edge 0.9 below 1.0", "check_3: a warning"])
+    checks = document.section("Checks")
+    tones = ["fail" if i == 7 else "warn" if i == 3 else "pass" for i in range(rows)]
+    checks.table(["check", Column("measured", "1", ".2f"), "verdict"],
+                 [[f"check_{i}", i / 3, Verdict(tone, tone)] for i, tone in enumerate(tones)],
+                 caption="Every check")
+    document.section("Why", level=3).paragraph("Because `a` and **b**.")
+    figures = document.section("Figures")
+    figures.figure(_png(8, 8), "gain surface at 20 ms").figure(_png(6, 4), "step response")
+    document.section("Limits").bullets(["linear model"])
+    return write_html(document, tmp_path / "study.html"), document
+
+
+def test_a_report_answers_first_in_a_browser(tmp_path):
+    """Summary on top, every anchor resolving, every verdict cell classed and coloured, every
+    image loaded; a screenshot of the first screen is kept beside the page."""
+    from tests.support.html_render import inspect_report
+
+    path, document = _answering_report(tmp_path)
+    page = path.read_text(encoding="utf-8")
+    assert "`" not in page and "**" not in page          # no raw markup reaches the reader
+    assert "<code>kp</code>" in page and "<details><summary>Every check (30 rows" in page
+    if chromium_path() is None:
+        pytest.skip("chromium not installed (make chromium needs apt and root)")
+    try:
+        seen = inspect_report(path, screenshot=tmp_path / "study.png")
+    except ChromiumUnavailable as exc:
+        pytest.skip(f"chromium did not render: {exc}")
+    assert seen["summary_top"] is not None and seen["summary_top"] < 250
+    assert "28 passed" in seen["summary_text"] and "check_7 failed" in seen["summary_text"]
+    assert seen["contents"] and seen["broken_anchors"] == []
+    assert seen["anchors"] == len(document.table_of_contents()) == 4
+    assert seen["verdict_cells"] == 30 and seen["unclassed_verdicts"] == []
+    assert seen["images"] == [2, 2]
+    assert (tmp_path / "study.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_browser_check_sees_a_broken_anchor_and_an_unclassed_verdict(tmp_path):
+    from tests.support.html_render import inspect_report
+
+    path, _ = _answering_report(tmp_path, rows=8)
+    page = path.read_text(encoding="utf-8")
+    page = page.replace('id="limits"', 'id="elsewhere"').replace(
+        '<td class="warn">warn</td>', "<td>warn</td>")
+    path.write_text(page, encoding="utf-8")
+    if chromium_path() is None:
+        pytest.skip("chromium not installed (make chromium needs apt and root)")
+    seen = inspect_report(path)
+    assert seen["broken_anchors"] == ["#limits"] and seen["unclassed_verdicts"] == ["warn"]

@@ -94,3 +94,22 @@ def test_survival_checks_against_the_planner_limits():
                                 faults=[("localizer", Fault("mic_dead", 1.0, channel="M1"))])
     assert survival(data, permanent) == {"finite": True, "speed": False,
                                          "no_collision": False, "stopped": True}
+
+
+@pytest.mark.parametrize("chunk_rows", [1, 1000], ids=["row by row", "whole"])
+def test_stopping_is_not_asked_of_a_robot_whose_source_still_moves(tmp_path, chunk_rows):
+    """A healthy tracking run ends with the source driving at 0.2 m/s and the robot following
+    it: not having stopped is right there, so the figure is None, not False."""
+    path = tmp_path / "results.csv"
+    # the source drives +y at 0.2 m/s; the robot follows 0.6 m behind at the same speed
+    path.write_text("time,plant.x,plant.y,source.x,source.y,plant.speed\n" + "".join(
+        f"{t:.2f},0.0,{0.2 * t:.4f},0.0,{0.6 + 0.2 * t:.4f},0.2\n"
+        for t in np.arange(0, 1.0001, 0.1)))
+    summary = fault_summary(ResultRows(path, chunk_rows), (), stop_distance=0.5)
+    assert summary["source_speed_at_end_m_s"] == pytest.approx(0.2)
+    assert summary["stopped_safely"] is None
+    # the same robot standing still beside a source that has stopped: asked, and answered
+    path.write_text("time,plant.x,plant.y,source.x,source.y,plant.speed\n"
+                    "0.0,0.0,0.0,0.0,0.6,0.0\n0.1,0.0,0.0,0.0,0.6,0.0\n")
+    summary = fault_summary(ResultRows(path, chunk_rows), (), stop_distance=0.5)
+    assert summary["source_speed_at_end_m_s"] == 0.0 and summary["stopped_safely"] is True

@@ -1,8 +1,12 @@
-"""Run outputs: atomic writes, the run folder's start order, the results reader, and a
-recorder that keeps no rows (the figures read back from the file: test_metrics.py)."""
+"""Run outputs: atomic writes, the run folder's start order, a dead run's summary read back
+as abandoned, the results reader, and a recorder that keeps no rows (the figures read back from
+the file: test_metrics.py)."""
 
 import json
 import os
+import socket
+import subprocess
+import sys
 import tracemalloc
 
 import numpy as np
@@ -10,7 +14,9 @@ import pytest
 
 from components.common.errors import ConfigError
 from orchestrator.run import folder as outputs
-from orchestrator.run.folder import RunFolder, atomic_write_bytes, atomic_write_json, read_summary
+from orchestrator.processes import process_record
+from orchestrator.run.folder import (RunFolder, atomic_write_bytes, atomic_write_json,
+                                     mark_abandoned, read_summary)
 from orchestrator.run.recorder import Recorder
 from orchestrator.run.results import count_rows, iter_result_chunks, read_results
 
@@ -64,7 +70,10 @@ def test_run_folder_start_clears_an_older_run_and_says_running(tmp_path):
     folder.check()
     folder.start({"scenario": "x"})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "summary.json"]
-    assert read_summary(tmp_path) == {"scenario": "x", "status": "running"}
+    summary = read_summary(tmp_path)
+    assert summary == {"scenario": "x", "status": "running", "process": summary["process"]}
+    assert (summary["process"]["pid"], summary["process"]["host"]) == (os.getpid(),
+                                                                      socket.gethostname())
 
 
 def test_run_folder_start_unlinks_the_old_summary_first(tmp_path, monkeypatch):
@@ -100,6 +109,62 @@ def test_run_folder_refuses_a_file_and_an_unwritable_place(tmp_path):
 def test_summary_status_must_be_known(tmp_path):
     with pytest.raises(ValueError, match="not one of"):
         RunFolder(tmp_path).write_summary({"status": "done"})
+    with pytest.raises(ValueError, match="not one of"):   # read, never written
+        RunFolder(tmp_path).write_summary({"status": "abandoned", "process": process_record()})
+
+
+@pytest.mark.parametrize("summary", [{"status": "running"}, {"status": "ok", "plots": "drawing"}],
+                         ids=["running", "drawing"])
+def test_a_summary_of_a_run_in_progress_must_name_its_process(tmp_path, summary):
+    with pytest.raises(ValueError, match="must name its process"):
+        RunFolder(tmp_path).write_summary(summary)
+    assert not (tmp_path / "summary.json").exists()
+
+
+# ----- a summary whose process is gone ------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def ended_process():
+    """The record of a process that ran here and has ended (reaped)."""
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    record = process_record(child.pid)
+    child.kill()
+    child.wait()
+    return record
+
+
+def test_a_running_summary_whose_process_ended_reads_abandoned(tmp_path, ended_process):
+    folder = RunFolder(tmp_path)
+    folder.write_summary({"scenario": "x", "status": "running", "process": ended_process})
+    summary = read_summary(tmp_path)
+    assert summary["status"] == "abandoned"
+    assert summary["error"] == (f"abandoned: the process that ran it (pid "
+                                f"{ended_process['pid']} on {socket.gethostname()}) ended "
+                                "before the run finished")
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "running"
+
+
+def test_plots_being_drawn_by_a_process_that_ended_read_abandoned(tmp_path, ended_process):
+    RunFolder(tmp_path).write_summary({"status": "ok", "plots": "drawing",
+                                       "process": ended_process})
+    summary = read_summary(tmp_path)
+    assert (summary["status"], summary["plots"]) == ("ok", "abandoned")
+    assert f"pid {ended_process['pid']} on " in summary["plots_error"]
+    assert "error" not in summary
+
+
+@pytest.mark.parametrize("case", ["alive", "other-host", "no-record", "finished"])
+def test_what_is_not_known_to_be_dead_reads_as_written(tmp_path, ended_process, case):
+    summary = {"status": "running", "process": process_record()}
+    if case == "other-host":
+        summary["process"] = dict(ended_process, host=socket.gethostname() + ".elsewhere")
+    elif case == "no-record":   # written before summaries named their process
+        summary.pop("process")
+    elif case == "finished":
+        summary = {"status": "ok", "plots": ["trajectories.png"], "process": ended_process}
+    assert mark_abandoned(summary) is summary
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    assert read_summary(tmp_path) == summary
 
 
 # ----- recorder and reader ----------------------------------------------------------------

@@ -26,7 +26,7 @@ def test_assignments_parse_to_typed_values(text, expected):
 
 @pytest.mark.parametrize("text, message", [
     ("v_cruise=0.2", "expected instance.parameter=value"),
-    ("planner.v_cruise", "expected instance.parameter=value"),
+    ("planner.v_cruise", "no '='; write it as one word: --set planner.v_cruise=0.2,0.3"),
     ("planner.v_cruise=", "expected instance.parameter=value"),
     (".v_cruise=1", "expected instance.parameter=value"),
     ("planner.v_cruise=0.2,0.3,0.2", "value 0.2 is given twice"),
@@ -135,6 +135,23 @@ def test_plan_scenarios_keeps_the_first_of_equal_runs_and_reports_all_problems(t
     assert "no parameter 'a_max'" in message and "no parameter 'mode'" in message
     with pytest.raises(ConfigError, match="2 settings for 3 scenarios"):
         plan_scenarios([first, *bad], tmp_path / "mc", settings=[{}, {}])
+
+
+def test_monte_carlo_rows_carry_every_parameter_that_differs(tmp_path):
+    system = _System(tmp_path)
+    draws = [scenario_from_dict({"stop_time": 1.0, "seed": seed, "parameters": parameters})
+             for seed, parameters in ((1, {"planner.v_cruise": 0.25}),
+                                      (2, {"planner.v_cruise": 0.35}), (3, {}))]
+    runs = plan_scenarios(draws, tmp_path / "mc", systems={draws[0].system: system})
+    # v_cruise is drawn (or left out by one draw): a column; a value all share is not
+    same = plan_scenarios(draws[:1] + [draws[0].with_overrides(seed=5)], tmp_path / "mc",
+                          systems={draws[0].system: system})
+    assert [r.settings for r in same] == [{"scenario": "scenario", "seed": 1},
+                                          {"scenario": "scenario", "seed": 5}]
+    assert [r.settings for r in runs] == [
+        {"scenario": "scenario", "seed": 1, "planner.v_cruise": 0.25},
+        {"scenario": "scenario", "seed": 2, "planner.v_cruise": 0.35},
+        {"scenario": "scenario", "seed": 3, "planner.v_cruise": None}]
 
 
 @pytest.mark.parametrize("content", [

@@ -385,7 +385,7 @@ def test_several_mistakes_are_reported_together(mini):
 
 
 def test_sonotrack_table_checks_clean_against_matching_fmus(tmp_path):
-    """The generated .ssd fits FMUs that have exactly the DESIGN.md ports."""
+    """The generated .ssd fits FMUs that have exactly the contract's ports (orchestrator/ssp/sonotrack.py)."""
     for model, ports in FMU_PORTS.items():
         make_fmu(tmp_path / f"{model}.fmu", model, ports)
     ssd = write_ssd(tmp_path / "SystemStructure.ssd", sonotrack_system())

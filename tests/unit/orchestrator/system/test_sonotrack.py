@@ -48,9 +48,14 @@ def test_every_column_named_is_an_output_of_the_system():
     named = (set(SONOTRACK.recorded_columns) | set(SONOTRACK.position_columns)
              | {SONOTRACK.body_speed, *SONOTRACK.wheel_slips, SONOTRACK.fix_attempts,
                 SONOTRACK.fix_status, SONOTRACK.rejected_fixes, SONOTRACK.wheel_check_stops,
-                SONOTRACK.odometry_check_stops})
+                SONOTRACK.odometry_check_stops, *SONOTRACK.odometry_position,
+                *SONOTRACK.fix_columns}
+             | {getattr(SONOTRACK, f)(side) for f in ("wheel_speed", "rim_speed",
+                                                      "wheel_reference")
+                for side in SONOTRACK.sides})
     assert named - outputs == set()
-    assert len(named) == 16   # the 14 always recorded and the two check counters
+    # the 20 always recorded, the two check counters, odometry, fixes, wheel speeds, references
+    assert len(named) == 20 + 2 + 2 + 3 + 2 + 2
     assert f"{SONOTRACK.planner}.{SONOTRACK.stop_distance_parameter}" in _ports("parameter")
 
 
@@ -62,7 +67,8 @@ def test_columns_follow_the_roles():
         "beacon.x", "beacon.y", "robot.x", "robot.y", "robot.heading", "robot.speed",
         "robot.slip_left", "robot.slip_right", "ears.fix_attempts", "ears.fix_status",
         "brain.rejected_fixes", "ears.faults_active", "beacon.faults_active",
-        "robot.faults_active")
+        "robot.faults_active", "controller_left.kp", "controller_left.kd", "controller_right.kp",
+        "controller_right.kd", "robot.rim_speed_left", "robot.rim_speed_right")
     assert (renamed.wheel_check_stops, renamed.odometry_check_stops) == (
         "brain.wheel_faults", "brain.odometry_faults")
 
@@ -103,6 +109,29 @@ def test_a_system_without_a_planner_stops_at_zero():
     assert SONOTRACK.stop_distance(no_planner, {"plant": {"stop_distance": 3.0}}) == 0.0
     assert SonotrackSystem(planner="plant").stop_distance(
         no_planner, {"plant": {"stop_distance": 3.0}}) == 3.0
+
+
+def _controllers(left_start, right_value=None):
+    """A system of two wheel controllers declaring ``mode`` with ``left_start``."""
+    def component(name):
+        start = left_start if name in ("controller_left", "controller_right") else None
+        if start is None:
+            raise ConfigError(f"no component {name!r}")
+        return SimpleNamespace(model_description=SimpleNamespace(
+            modelVariables=[SimpleNamespace(name="mode", start=start)]))
+
+    parameters = {} if right_value is None else {"controller_right": {"mode": right_value}}
+    return SimpleNamespace(component=component), parameters
+
+
+@pytest.mark.parametrize("left_start, right_value, expected", [
+    ("fgs_pd", None, "fgs_pd"),          # both from the FMU's start value: said once
+    ("fgs_pd", "pid", "fgs_pd / pid"),   # a run that sets one of them
+    (None, None, ""),                    # no controllers
+], ids=["same", "differ", "none"])
+def test_the_controller_law_of_a_run(left_start, right_value, expected):
+    system, parameters = _controllers(left_start, right_value)
+    assert SONOTRACK.controller_mode(system, parameters) == expected
 
 
 def test_the_module_examples_hold():
