@@ -3,16 +3,22 @@
 Monte Carlo over snr_db x distance x bearing (``--trials`` bursts per point, vectorised), the
 exact near-field estimator beside the paper's Eq. (4) and the far-field Eq. (5) bearing on the
 same delays; then pyroomacoustics shoebox rooms (anechoic and RT60 ~0.3 s) as an independent
-signal model. Prints a table, writes ``benchmarks/results/localizer_accuracy.json`` and a PNG
-of RMSE against the bound over SNR beside it.
+signal model; then the localizer's own room (scenarios/room.toml's 7 x 7 x 2.7 m lab, speaker
+0.3 m, microphones 0.2 m, bursts every 10 ms): range and bearing RMSE and bias against
+distance (0.5-6 m) and RT60 (0 = anechoic, 0.2, 0.3, 0.4, 0.6 s), over ``--room-placements``
+random static placements x ``--room-trials`` noise draws each (benchmarks/_room_accuracy.py).
+Prints tables, writes ``benchmarks/results/localizer_accuracy.json``, a PNG of RMSE against
+the bound over SNR, and ``localizer_accuracy_room.png`` (RMSE and bias against distance).
 
     .venv/bin/python benchmarks/localizer_accuracy.py [--trials 500] [--rooms 8]
+        [--room-placements 16] [--room-trials 25] [--room-only]
 """
 
 import argparse
 import json
 import math
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -22,6 +28,9 @@ from components.acoustics import (LocalizerSettings, band_derivative_energy, exa
                                   far_field_pair_bearings, locate_bursts, locate_records,
                                   make_estimator, range_bearing_covariance_bound,
                                   tdoa_covariance_bound)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _room_accuracy  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SNRS_DB = (0.0, 10.0, 20.0, 30.0)
@@ -180,7 +189,15 @@ def main(argv=None):
     parser.add_argument("--trials", type=int, default=500, help="bursts per grid point")
     parser.add_argument("--rooms", type=int, default=8, help="room placements per room point")
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--room-placements", type=int, default=16,
+                        help="static placements per distance x RT60 in the localizer's room")
+    parser.add_argument("--room-trials", type=int, default=25,
+                        help="noise draws per placement in the localizer's room")
+    parser.add_argument("--room-only", action="store_true",
+                        help="only the localizer's room (keeps the other sections of the JSON)")
     args = parser.parse_args(argv)
+    if args.room_only:
+        return room_only(args)
     started = time.perf_counter()
     records = []
     seed = args.seed
@@ -222,7 +239,6 @@ def main(argv=None):
         "anechoic_room_bearing_max_abs_deg_2m": max(r["bearing_max_abs_deg"] for r in anechoic_2m),
         "anechoic_room_bearing_target_deg": 1.0,
     }
-    elapsed = time.perf_counter() - started
     print(f"\nTDOA RMSE / bound, worst over snr_db >= 10 (valid fixes): "
           f"{targets['tdoa_rmse_over_crlb_max_snr_ge_10']:.3f} at {targets['tdoa_rmse_over_crlb_max_at']} "
           f"(all bursts: {targets['tdoa_rmse_all_over_crlb_max_snr_ge_10']:.3f}; target <= 1.3)")
@@ -230,25 +246,53 @@ def main(argv=None):
           f"bearing RMSE {point['bearing_rmse_deg']:.4f} deg (target <= 0.5)")
     print(f"anechoic room, 2 m: worst bearing error {targets['anechoic_room_bearing_max_abs_deg_2m']:.3f} deg "
           f"(target <= 1)")
-    print(f"Monte Carlo {monte_carlo_s:.1f} s, total {elapsed:.1f} s")
+    room_started = time.perf_counter()
+    room = _room_accuracy.measure(args.room_placements, args.room_trials, args.seed + 7)
+    _room_accuracy.print_tables(room)
+    room_s = time.perf_counter() - room_started
+    elapsed = time.perf_counter() - started
+    print(f"Monte Carlo {monte_carlo_s:.1f} s, localizer's room {room_s:.1f} s, "
+          f"total {elapsed:.1f} s")
 
     RESULTS.mkdir(parents=True, exist_ok=True)
     settings = LocalizerSettings()
     result = {
         "description": "AcousticLocalizer accuracy vs Cramer-Rao bounds; RMSE over valid fixes",
         "command": f"benchmarks/localizer_accuracy.py --trials {args.trials} --rooms {args.rooms} "
+                   f"--room-placements {args.room_placements} --room-trials {args.room_trials} "
                    f"--seed {args.seed}",
         "settings": settings.as_dict(),
         "records": records,
         "rooms": rooms,
         "targets": targets,
+        "room_accuracy": room,
         "runtime_s": elapsed,
         "machine": {"python": platform.python_version(), "processor": platform.machine()},
     }
     path = RESULTS / "localizer_accuracy.json"
     path.write_text(json.dumps(result, indent=2, allow_nan=True) + "\n")
     plot(records, RESULTS / "localizer_accuracy.png")
-    print(f"wrote {path} and {path.with_suffix('.png')}")
+    _room_accuracy.plot(room, RESULTS / "localizer_accuracy_room.png")
+    print(f"wrote {path}, {path.with_suffix('.png')} and localizer_accuracy_room.png")
+    return result
+
+
+def room_only(args):
+    """Measure only the localizer's room and replace that section of an existing JSON."""
+    started = time.perf_counter()
+    room = _room_accuracy.measure(args.room_placements, args.room_trials, args.seed + 7)
+    _room_accuracy.print_tables(room)
+    path = RESULTS / "localizer_accuracy.json"
+    result = json.loads(path.read_text()) if path.exists() else {}
+    result["room_accuracy"] = room
+    result["room_command"] = (f"benchmarks/localizer_accuracy.py --room-only --room-placements "
+                              f"{args.room_placements} --room-trials {args.room_trials} "
+                              f"--seed {args.seed}")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2, allow_nan=True) + "\n")
+    _room_accuracy.plot(room, RESULTS / "localizer_accuracy_room.png")
+    print(f"localizer's room {time.perf_counter() - started:.1f} s; wrote {path} (room_accuracy) "
+          f"and localizer_accuracy_room.png")
     return result
 
 

@@ -1,5 +1,8 @@
 """Acoustic localizer: three-microphone line array, synthesised records, TDOA range and bearing.
 
+Free field by default; with ``room`` a shoebox room heard through image sources for the moving
+source and the moving array (``room``, ``motion``, ``reverberation``, ``rendering``).
+
 Pure numerics (numpy only); the pythonfmu slave is :mod:`.fmu`, not imported here.
 """
 
@@ -13,10 +16,15 @@ from .gcc import WEIGHTINGS, DelayEstimate, estimate_delays, estimate_pair_delay
 from .geometry import (exact_tdoas, microphone_positions, microphone_ranges, robot_polar,
                        source_in_array_frame)
 from .localizer import BurstFixes, FixStatus, LocalizerCore, judge, locate_bursts, locate_records
+from .motion import PoseHistory
 from .onset import detect_onsets
+from .rendering import ArrivalRenderer
+from .reverberation import Arrivals, RoomAcoustics
+from .room import (ImageLattice, LeftRoomError, ShoeboxRoom, eyring_rt60, image_absorption,
+                   image_rt60, sabine_rt60)
 from .settings import DEFAULTS, LocalizerSettings
 from .synthesis import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE, noise_std, quantisation_step,
-                        record_length, synthesise_records)
+                        quantise, record_length, synthesise_records)
 from .tdoa import TdoaMeasurement, measure_tdoas
 
 __all__ = [
@@ -26,8 +34,10 @@ __all__ = [
     "WEIGHTINGS", "DelayEstimate", "estimate_delays", "estimate_pair_delays", "exact_tdoas",
     "microphone_positions", "microphone_ranges", "robot_polar", "source_in_array_frame",
     "BurstFixes", "FixStatus", "LocalizerCore", "judge",
-    "locate_bursts", "locate_records", "detect_onsets", "DEFAULTS",
+    "locate_bursts", "locate_records", "PoseHistory", "detect_onsets", "ArrivalRenderer",
+    "Arrivals", "RoomAcoustics", "ImageLattice", "LeftRoomError", "ShoeboxRoom", "eyring_rt60",
+    "image_absorption", "image_rt60", "sabine_rt60", "DEFAULTS",
     "LocalizerSettings", "REFERENCE_AMPLITUDE", "REFERENCE_DISTANCE", "noise_std",
-    "quantisation_step", "record_length", "synthesise_records", "TdoaMeasurement",
+    "quantisation_step", "quantise", "record_length", "synthesise_records", "TdoaMeasurement",
     "measure_tdoas",
 ]

@@ -4,7 +4,7 @@ Each estimator validates the delays (finite, physically possible), then computes
 ``(distance, bearing)`` from the array centre M2. Three are registered:
 
 ``exact``
-    The exact near-field geometry (DESIGN.md errata for Eqs. 4-5):
+    The exact near-field geometry (docs/errata.md, Eqs. 4-5):
     ``D = (2 l^2 - a^2 - b^2) / (2 (a + b))``, ``sin(bearing) = (b - a)(2D + a + b) / (4 l D)``,
     with ``a = c tdoa_12``, ``b = c tdoa_23``.
 ``paper``

@@ -23,7 +23,7 @@ from ..common.faults import IMPULSES_PER_RECORD, MICROPHONES, REFLECTION_COEFFIC
 from .synthesis import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE, _delayed_bursts, _quantise,
                         noise_std, quantisation_step)
 
-__all__ = ["faulted_records", "channel_fault", "drops_fix", "mirror_in_wall", "CLIP_RUN",
+__all__ = ["faulted_records", "apply_record_faults", "channel_fault", "drops_fix", "mirror_in_wall", "CLIP_RUN",
            "CLIP_MIN_STEPS", "DEAD_SPAN_STEPS", "CLICK_DECAY_SAMPLES"]
 
 # Samples held at one extreme that mark a clipped record: a Hann-windowed chirp sampled at
@@ -52,7 +52,7 @@ def drops_fix(index, fraction):
     return math.floor((index + 1) * fraction) > math.floor(index * fraction)
 
 
-def faulted_records(settings, ranges, image_ranges, faults, rng):
+def faulted_records(settings, ranges, image_ranges, faults, rng, clean=None):
     """Three microphone records of one burst with the active faults applied.
 
     Parameters
@@ -65,6 +65,9 @@ def faulted_records(settings, ranges, image_ranges, faults, rng):
     faults : sequence of Fault
         The acoustic faults active at this fix (``lost_fixes`` is handled by the caller).
     rng : numpy.random.Generator
+    clean : numpy.ndarray, optional
+        Shape (3, n): the noise-free records without the wall (a room's); by default the
+        free field's direct sound from ``ranges``.
 
     Returns
     -------
@@ -76,13 +79,35 @@ def faulted_records(settings, ranges, image_ranges, faults, rng):
     ranges = np.asarray(ranges, dtype=float)
     arrivals = ranges / s.speed_of_sound
     start = np.asarray(np.floor((arrivals.min() - s.pre_roll) * s.sample_rate) / s.sample_rate)
-    gains = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / ranges
-    clean = _delayed_bursts(s.burst, gains, arrivals, start, s.sample_rate, n)
+    if clean is None:
+        gains = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / ranges
+        clean = _delayed_bursts(s.burst, gains, arrivals, start, s.sample_rate, n)
     if image_ranges is not None:
         image = np.asarray(image_ranges, dtype=float)
         image_gains = REFLECTION_COEFFICIENT * REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / image
         clean = clean + _delayed_bursts(s.burst, image_gains, image / s.speed_of_sound, start,
                                         s.sample_rate, n)
+    return apply_record_faults(settings, clean, faults, rng)
+
+
+def apply_record_faults(settings, clean, faults, rng):
+    """Noise (raised by ``low_snr``), clicks, gain errors, clipping, the ADC, dead channels.
+
+    Parameters
+    ----------
+    settings : LocalizerSettings
+    clean : numpy.ndarray
+        Shape (3, n): noise-free records.
+    faults : sequence of Fault
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape (3, n): quantised samples in [-1, 1).
+    """
+    s = settings
+    n = clean.shape[-1]
     sigma = s.noise_std
     for fault in faults:
         if fault.kind == "low_snr":

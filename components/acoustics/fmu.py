@@ -1,8 +1,9 @@
 """The AcousticLocalizer FMU: a thin pythonfmu slave around :class:`LocalizerCore`."""
 
 from ..common.errors import InputError
-from ..common.slave import DefaultExperiment, SonotrackSlave, load_ranges
+from ..common.slave import DefaultExperiment, Fmi2Status, SonotrackSlave, load_ranges
 from .localizer import LocalizerCore
+from .room import LeftRoomError
 
 __all__ = ["AcousticLocalizer"]
 
@@ -17,7 +18,8 @@ class AcousticLocalizer(SonotrackSlave):
 
     description = ("Acoustic localizer (Sec. 2): synthesises three microphone records of the "
                    "source's chirp (fractional delays, 1/r, noise, 10-bit ADC) and estimates "
-                   "range and bearing by band-limited GCC and the exact near-field geometry")
+                   "range and bearing by band-limited GCC and the exact near-field geometry; "
+                   "free field, or a shoebox room (image sources, moving source and array)")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.01)
     valid_ranges = load_ranges("acoustics")
 
@@ -59,6 +61,10 @@ class AcousticLocalizer(SonotrackSlave):
         try:
             attempted = core.step(current_time, step_size, self.source_x, self.source_y,
                                   self.emitting, self.robot_x, self.robot_y, self.robot_heading)
+        except LeftRoomError as exc:
+            # Not a bad input value but the end of what the room can model: say where, stop.
+            self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
+            return False
         except InputError as exc:
             return self.refuse("source/robot position", None, str(exc))
         if not attempted:

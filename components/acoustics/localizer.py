@@ -14,8 +14,10 @@ from ..common.faults import parse_schedule
 from .estimators import make_estimator
 from .faults import channel_fault, drops_fix, faulted_records, mirror_in_wall
 from .geometry import _robot_polar_one, _source_in_array_frame_one, microphone_ranges
+from .motion import PoseHistory
+from .reverberation import RoomAcoustics
 from .settings import LocalizerSettings
-from .synthesis import _synthesise_one, synthesise_records
+from .synthesis import _quantise, _synthesise_one, synthesise_records
 from .tdoa import _measure_tdoas_one, measure_tdoas
 
 __all__ = ["FixStatus", "BurstFixes", "judge", "locate_bursts", "locate_records", "LocalizerCore"]
@@ -177,14 +179,20 @@ class LocalizerCore:
     attempt sets ``valid = False`` and keeps the last valid fix's values; ``measurement_id``
     counts valid fixes.
 
+    With ``room`` true the records are those of the shoebox room (:mod:`.reverberation`): the
+    core keeps the inputs of recent steps (:class:`~.motion.PoseHistory`, part of the state)
+    for the source's positions at earlier emissions, and refuses a step whose source or
+    microphones are outside the room (:class:`~.room.LeftRoomError`).
+
     Parameters
     ----------
     **parameters
         See :data:`~.settings.DEFAULTS`.
     """
 
-    # The fault schedule is set from parameters and never changes: not part of the state.
-    STATE_CONSTANTS = ("faults",)
+    # The fault schedule and the room are set from parameters and never change: not part of
+    # the state (the room's image lattice is rebuilt from them).
+    STATE_CONSTANTS = ("faults", "acoustics")
 
     def __init__(self, fault_schedule="", **parameters):
         self.settings = LocalizerSettings(**parameters)
@@ -206,6 +214,9 @@ class LocalizerCore:
         self.true_distance = 0.0
         self.true_bearing = 0.0
         self.missed_instants = 0
+        self.acoustics = RoomAcoustics(self.settings) if self.settings.room else None
+        self.history = (PoseHistory(self.acoustics.history_horizon)
+                        if self.acoustics is not None else None)
 
     def fix_due(self, time, step_size):
         """Return the index of the latest fix instant before ``time + step_size`` not yet served, or None."""
@@ -225,12 +236,20 @@ class LocalizerCore:
         ------
         InputError
             A position or heading is NaN or infinite (naming the port and value).
+        LeftRoomError
+            In a room, the source or a microphone is outside it (naming the time, the body
+            and where it is).
         """
         for port, value in (("source_x", source_x), ("source_y", source_y),
                             ("robot_x", robot_x), ("robot_y", robot_y),
                             ("robot_heading", robot_heading)):
             if not math.isfinite(value):
                 raise InputError(f"AcousticLocalizer: input {port} = {value!r} is not finite")
+        if self.acoustics is not None:
+            self.acoustics.check_inside(time, source_x, source_y, robot_x, robot_y,
+                                        robot_heading)
+            self.history.record(time, source_x, source_y, emitting, robot_x, robot_y,
+                                robot_heading)
         index = self.fix_due(time, step_size)
         if index is None:
             return False
@@ -241,11 +260,11 @@ class LocalizerCore:
         self.faults_active = len(active)
         self.fix_attempts += 1
         self._attempt(source_x, source_y, bool(emitting), robot_x, robot_y, robot_heading,
-                      index, active)
+                      index, active, time)
         return True
 
     def _attempt(self, source_x, source_y, emitting, robot_x, robot_y, robot_heading,
-                 index=0, active=()):
+                 index=0, active=(), time=0.0):
         s = self.settings
         forward, left = _source_in_array_frame_one(source_x, source_y, robot_x, robot_y,
                                                    robot_heading, s.array_offset)
@@ -269,7 +288,10 @@ class LocalizerCore:
             ranges = microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading,
                                        s.mic_spacing, s.array_offset)
             record_faults = [f for f in active if f.kind != "lost_fixes"]
-            if record_faults:
+            if self.acoustics is not None:
+                fixes = _locate_records_one(s, self.estimator, self._room_records(
+                    time, record_faults, source_x, source_y, robot_x, robot_y, robot_heading))
+            elif record_faults:
                 fixes = _locate_records_one(s, self.estimator, self._faulted_records(
                     ranges, record_faults, source_x, source_y, robot_x, robot_y,
                     robot_heading))
@@ -285,6 +307,28 @@ class LocalizerCore:
                 self.measurement_id += 1
         self.fix_status = int(status)
         self.valid = status == FixStatus.OK
+
+    def _room_records(self, time, faults, source_x, source_y, robot_x, robot_y,
+                      robot_heading):
+        """The room's records of the burst heard at ``time``, with noise, faults and the ADC."""
+        s = self.settings
+        clean, ranges = self.acoustics.records(self.history.table(), time)
+        if not faults:
+            noise = self.rng.standard_normal(clean.shape)
+            noise *= s.noise_std
+            noise += clean
+            return _quantise(noise, s.adc_bits)
+        walls = [f for f in faults if f.kind == "reflecting_wall"]
+        image_ranges = None
+        # The fault's wall stands apart from the room's: its image (of the direct sound only,
+        # reflection 0.9 as in free field) adds to the room's response.
+        if walls and (source_x - walls[0].magnitude) * (robot_x - walls[0].magnitude) > 0.0:
+            image_x, image_y = mirror_in_wall(source_x, source_y, walls[0].magnitude)
+            rise = s.source_height - s.mic_height
+            image_ranges = [math.hypot(r, rise) for r in microphone_ranges(
+                image_x, image_y, robot_x, robot_y, robot_heading, s.mic_spacing,
+                s.array_offset)]
+        return faulted_records(s, ranges, image_ranges, faults, self.rng, clean=clean)
 
     def _faulted_records(self, ranges, faults, source_x, source_y, robot_x, robot_y,
                          robot_heading):

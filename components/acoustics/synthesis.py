@@ -18,7 +18,7 @@ import numpy as np
 from ._rows import row_offsets
 
 __all__ = ["REFERENCE_DISTANCE", "REFERENCE_AMPLITUDE", "noise_std", "quantisation_step",
-           "synthesise_records", "record_length"]
+           "synthesise_records", "record_length", "quantise"]
 
 # The SNR is defined at 1 m from the source, where the burst's peak is half the ADC full scale
 # (a preamplifier gain set so that a source at 0.5 m just reaches full scale).
@@ -125,6 +125,17 @@ def _synthesise_one(burst, ranges, *, sample_rate, speed_of_sound, noise_std, ad
     for row, offset in enumerate(first):
         span_samples = records[row, offset:offset + span]
         np.add(span_samples, clean[row], out=span_samples)
+    return _quantise(records, adc_bits)
+
+
+def quantise(records, adc_bits):
+    """Clip ``records`` to the ADC's full scale [-1, 1) and round them to its levels, in place.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``records``.
+    """
     return _quantise(records, adc_bits)
 
 

@@ -90,6 +90,65 @@ def test_unhearable_source_is_invalid_not_an_error(source):
     assert slave.valid is False and slave.measurement_id == 0
 
 
+ROOM_PARAMETERS = ("room", "room_origin_x", "room_origin_y", "room_length_x", "room_length_y",
+                   "room_height", "absorption_walls", "absorption_floor", "absorption_ceiling",
+                   "rt60", "source_height", "mic_height", "reverb_cut_db", "image_order",
+                   "burst_period")
+
+
+def test_room_parameters_come_after_every_published_variable():
+    root = AcousticLocalizer(instance_name="x").to_xml()
+    references = {v.get("name"): int(v.get("valueReference")) for v in root.find("ModelVariables")}
+    room = [references.pop(name) for name in ROOM_PARAMETERS]
+    assert room == sorted(room) and min(room) > max(references.values())
+
+
+def room_slave(**parameters):
+    return make_slave(room=True, rt60=0.3, reverb_cut_db=20.0, **parameters)
+
+
+def test_room_state_round_trip_through_json_gives_identical_outputs():
+    # Saved from one instance, restored into a fresh one: the inputs of past steps (the
+    # source's positions at earlier emissions) must travel with the state.
+    slave = room_slave(seed=4)
+    for k in range(23):
+        slave.source_y = 2.0 + 0.002 * k
+        slave.do_step(k * 0.01, 0.01)
+    state = json.loads(json.dumps(slave._get_fmu_state()))
+    trace = []
+    for k in range(23, 55):
+        slave.source_y = 2.0 + 0.002 * k
+        assert slave.do_step(k * 0.01, 0.01)
+        trace.append(outputs(slave))
+    fresh = room_slave(seed=4)
+    fresh._set_fmu_state(state)
+    again = []
+    for k in range(23, 55):
+        fresh.source_y = 2.0 + 0.002 * k
+        fresh.do_step(k * 0.01, 0.01)
+        again.append(outputs(fresh))
+    assert again == trace
+    assert trace[-1][5] >= 5 and trace[-1][2]
+
+
+def test_leaving_the_room_refuses_the_step_with_one_line():
+    slave = room_slave()
+    assert slave.do_step(0.0, 0.01)
+    slave.source_y = 6.75
+    assert slave.do_step(0.01, 0.01) is False
+    message = slave.log_queue[-1].msg
+    assert message == ("localizer: at t = 0.01 s the source is at (-1, 6.75, 0.3) m, outside "
+                       "the room (x in [-3.5, 3.5], y in [-0.5, 6.5], z in [0, 2.7] m)")
+
+
+def test_room_relations_refused_at_initialisation():
+    from components.common.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"^localizer: AcousticLocalizer: mic_height = 3\.0 "
+                                             r"m puts the microphones outside the room"):
+        room_slave(mic_height=3.0)
+
+
 @pytest.mark.integration
 def test_built_fmu_runs_in_fmpy(tmp_path):
     from fmpy import simulate_fmu

@@ -62,7 +62,7 @@ def test_robot_polar_moves_fix_to_reference_point():
 
 
 def test_paper_eq4_errata_value():
-    # DESIGN.md: the printed Eq. (4) gives 1.19 m for a source 2 m away at 45 deg.
+    # docs/errata.md: the printed Eq. (4) gives 1.19 m for a source 2 m away at 45 deg.
     tdoa_12, tdoa_23 = exact_tdoas(2.0, math.radians(45), SPACING, SOUND)
     location = PaperEq4(SPACING, SOUND).locate(tdoa_12, tdoa_23)
     assert float(location.distance) == pytest.approx(1.19, abs=0.005)

@@ -133,3 +133,89 @@ def test_scalar_single_burst_path_equals_the_batched_path_bit_for_bit(settings):
     assert rng_one.bit_generator.state == rng_batch.bit_generator.state
     if settings.get("snr_db") == 0.0:
         assert len(statuses) > 1, "0 dB should exercise failed fixes too"
+
+
+# ----- in a room -------------------------------------------------------------------------------
+def room_run(core, steps, source=(-0.5, 2.5), t0=0.0, h=0.01):
+    for k in range(steps):
+        core.step(t0 + k * h, h, source[0], source[1] + 0.002 * k, True, **POSE)
+
+
+def test_free_field_ignores_the_room_parameters_bit_for_bit():
+    plain = LocalizerCore(seed=3, snr_db=10.0)
+    dressed = LocalizerCore(seed=3, snr_db=10.0, room=False, rt60=0.5, mic_height=1.0,
+                            source_height=0.7, room_origin_x=-1.0, burst_period=0.02)
+    assert dressed.acoustics is None and dressed.history is None
+    for core in (plain, dressed):
+        run(core, (-1.0, 2.0), steps=41)
+    states = [snapshot(core)["__object__"] for core in (plain, dressed)]
+    for state in states:
+        del state["settings"]          # the parameters themselves differ
+    assert states[0] == states[1]
+    assert states[0]["measurement_id"] == 5
+
+
+def test_anechoic_room_at_one_height_gives_the_free_field_fixes():
+    # Same seed, same noise draws: the records differ by the rendering's 5e-4 of the burst.
+    free = LocalizerCore(seed=4, snr_db=20.0)
+    room = LocalizerCore(seed=4, snr_db=20.0, room=True, absorption_walls=1.0,
+                         absorption_floor=1.0, absorption_ceiling=1.0, source_height=0.25,
+                         mic_height=0.25)
+    for k in range(51):
+        for core in (free, room):
+            core.step(k * 0.01, 0.01, -0.7, 2.4, True, **POSE)
+        if k % 10 == 0:
+            assert room.fix_status == free.fix_status == FixStatus.OK
+            assert room.distance == pytest.approx(free.distance, abs=2e-3)
+            assert room.bearing == pytest.approx(free.bearing, abs=math.radians(0.01))
+
+
+def test_a_body_leaving_the_room_stops_the_step_with_time_body_and_place():
+    from components.acoustics.room import LeftRoomError
+
+    core = LocalizerCore(room=True, rt60=0.3)
+    room_run(core, 12)
+    kept = snapshot(core)
+    with pytest.raises(LeftRoomError) as caught:
+        core.step(0.12, 0.01, 0.2, 6.6, True, **POSE)
+    assert str(caught.value) == ("at t = 0.12 s the source is at (0.2, 6.6, 0.3) m, outside the "
+                                 "room (x in [-3.5, 3.5], y in [-0.5, 6.5], z in [0, 2.7] m)")
+    assert snapshot(core) == kept
+    with pytest.raises(LeftRoomError, match=r"the robot's microphone M1 is at \(-3\.6, "):
+        core.step(0.12, 0.01, 0.0, 3.0, True, robot_x=-3.2, robot_y=1.0,
+                  robot_heading=math.pi / 2)
+
+
+def test_room_state_round_trip_through_json_repeats_the_future():
+    core = LocalizerCore(seed=9, room=True, rt60=0.3, reverb_cut_db=20.0)
+    room_run(core, 37)
+    saved = json.loads(json.dumps(snapshot(core)))
+    assert "lattice" not in json.dumps(saved)            # rebuilt from the parameters
+    assert len(saved["__object__"]["history"]["__object__"]["samples"]) > 10
+    room_run(core, 40, t0=0.37)
+    first = snapshot(core)
+    restore(core, saved)
+    room_run(core, 40, t0=0.37)
+    assert snapshot(core) == first
+    assert core.measurement_id >= 6
+
+
+def test_faults_compose_with_the_room():
+    from components.common.faults import Fault, encode_schedule
+
+    def attempt(faults):
+        core = LocalizerCore(seed=2, room=True, rt60=0.3, reverb_cut_db=20.0,
+                             fault_schedule=encode_schedule(faults))
+        room_run(core, 11)
+        return core
+
+    plain = attempt([])
+    assert plain.fix_status == FixStatus.OK
+    assert attempt([Fault("mic_dead", 0.0, channel="M2")]).fix_status == \
+        FixStatus.DEAD_MICROPHONE
+    # A reflecting wall 0.3 m to the robot's right adds its image to the room's response:
+    # the same noise draws, another fix.
+    walled = attempt([Fault("reflecting_wall", 0.0, magnitude=0.3)])
+    assert walled.faults_active == 1
+    assert (walled.tdoa_12, walled.tdoa_23) != (plain.tdoa_12, plain.tdoa_23)
+    assert attempt([Fault("low_snr", 0.0, magnitude=-20.0)]).peak_quality < plain.peak_quality

@@ -1,0 +1,374 @@
+"""What the three microphones record in a room while the source and the robot move.
+
+One fix records ``n`` samples around the latest burst (the burst whose direct sound reaches M2
+at the fix instant ``t``). Into that record fall the latest burst's direct sound and early
+reflections and, when the source sounds every ``burst_period``, the late reflections of the
+bursts before it (with a 10 ms period and RT60 = 0.4 s, twenty of them within a 30 dB cut).
+
+Every arrival is one image source of one burst ``b``, emitted at ``e_b = e_0 - b T``:
+
+* the source is where it was at ``e_b`` (:class:`~.motion.PoseHistory`, linear between steps);
+  ``e_0`` solves ``e_0 = t - |M2(t) - S(e_0)| / c`` (three fixed-point steps);
+* each microphone is where it is when that image's wavefront reaches it: at ``a`` with
+  ``c (a - e_b) = |M_i(a) - I_b|``, the robot moving at the velocity of its last step. One
+  fixed-point step from ``a = t`` leaves an error of ``(v / c)^2 |a - t|``: under 1e-8 s;
+* only arrivals inside the record count, and only images reached within the time cut
+  (``rt60 * reverb_cut_db / 60`` after emission; the direct sound always counts).
+
+Neglected, with their bounds at the shipped speeds (source 0.2 m/s, robot 0.4 m/s): motion
+during one 1 ms burst (source 0.2 mm, robot 0.4 mm: a Doppler stretch below 1.2e-3 of the
+burst, common to the three microphones to within 1e-4 of itself, i.e. under 0.1 us across the
+burst); the robot's acceleration during one record (the extrapolated pose is off by under
+20 um); air absorption and the surfaces' frequency dependence (one absorption per surface over
+the 1-16 kHz burst); scattering (specular walls only).
+
+Cost: the image lattice is built once from the parameters; each fix computes the distance of
+every image of the latest source position to the three microphones (whole arrays, one
+coordinate at a time), picks the burst whose record each can reach, computes those arrivals
+exactly and renders them (:mod:`.rendering`).
+"""
+
+import math
+
+import numpy as np
+
+from .motion import PoseHistory
+from .rendering import ArrivalRenderer
+from .room import ImageLattice, ShoeboxRoom
+from .synthesis import REFERENCE_AMPLITUDE, REFERENCE_DISTANCE
+
+__all__ = ["RoomAcoustics", "Arrivals"]
+
+_SPAN = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE
+
+
+def _distance(dx, dy, dz):
+    """``sqrt(dx^2 + dy^2 + dz^2)`` into a new array."""
+    total = np.square(dx)
+    total += np.square(dy)
+    total += np.square(dz)
+    return np.sqrt(total, out=total)
+
+
+class Arrivals:
+    """Arrivals of image sources at the microphones (arrays of one length).
+
+    Attributes
+    ----------
+    microphone : numpy.ndarray of int
+        0, 1, 2 for M1, M2, M3.
+    delay : numpy.ndarray
+        Arrival instant [s] after the latest burst's emission.
+    gain : numpy.ndarray
+        Amplitude (the free field's ``A_ref r_ref / r`` times the reflections' factors).
+    burst, order, image : numpy.ndarray of int or None
+        With ``detail``: which burst (0 the latest), reflections on the way, lattice row.
+    path : numpy.ndarray or None
+        With ``detail``: path length [m].
+    """
+
+    def __init__(self, microphone, delay, gain, burst=None, order=None, image=None, path=None):
+        self.microphone = microphone
+        self.delay = delay
+        self.gain = gain
+        self.burst = burst
+        self.order = order
+        self.image = image
+        self.path = path
+
+
+class RoomAcoustics:
+    """The room a localizer hears: geometry, image lattice, and the records of one burst.
+
+    Parameters
+    ----------
+    settings : LocalizerSettings
+        With ``room`` true; its room fields are already checked.
+
+    Attributes
+    ----------
+    room : ShoeboxRoom
+    rt60 : float
+        The image sources' RT60 (:func:`~.room.image_rt60`) [s].
+    cut : float
+        Time cut after emission [s].
+    lattice : ImageLattice
+    """
+
+    # Built from parameters at construction and never changed: not part of the FMU state.
+    STATE_CONSTANTS = ("room", "lattice", "renderer", "_bounds")
+
+    def __init__(self, settings):
+        s = settings
+        self.room = ShoeboxRoom((s.room_origin_x, s.room_origin_y),
+                                (s.room_length_x, s.room_length_y, s.room_height),
+                                *s.room_absorption)
+        self.rt60 = s.room_rt60
+        self.cut = s.room_time_cut
+        self.speed_of_sound = s.speed_of_sound
+        self.source_height = s.source_height
+        self.mic_height = s.mic_height
+        self.mic_spacing = s.mic_spacing
+        self.array_offset = s.array_offset
+        self.burst_period = s.burst_period
+        self.burst_duration = s.burst_duration
+        self.sample_rate = s.sample_rate
+        self.pre_roll = s.pre_roll
+        self.n_samples = s.record_samples
+        # Earlier bursts whose reflections can still arrive within the cut.
+        self.earlier_bursts = (int(math.floor(self.cut / self.burst_period))
+                               if self.burst_period > 0.0 else 0)
+        record_span = (self.n_samples + 1) / self.sample_rate + self.pre_roll
+        self.lattice = ImageLattice(self.room, self.speed_of_sound * (self.cut + record_span),
+                                    None if s.image_order < 0 else s.image_order)
+        self.renderer = ArrivalRenderer(s.burst, s.sample_rate)
+        self._bounds = (self.room.origin.tolist(), self.room.size.tolist())
+
+    @property
+    def history_horizon(self):
+        """How far back the inputs are needed [s]: the earliest emission plus slack."""
+        return self.earlier_bursts * self.burst_period + 0.1 + 2.0 * self.cut
+
+    # ----- bodies ------------------------------------------------------------------------------
+    def microphones(self, robot_x, robot_y, robot_heading):
+        """Room-frame positions (3, 3) of M1, M2, M3 (rows) for a robot pose."""
+        cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
+        centre = (robot_x + self.array_offset * cos_h - self.room.origin[0],
+                  robot_y + self.array_offset * sin_h - self.room.origin[1])
+        left = (-self.mic_spacing * sin_h, self.mic_spacing * cos_h)
+        return np.array([[centre[0] + side * left[0], centre[1] + side * left[1],
+                          self.mic_height] for side in (1.0, 0.0, -1.0)])
+
+    def check_inside(self, time, source_x, source_y, robot_x, robot_y, robot_heading):
+        """Raise :class:`~.room.LeftRoomError` if the source or a microphone is outside.
+
+        Called every step, so in Python floats; the message comes from the room.
+        """
+        (x0, y0, _), (lx, ly, _) = self._bounds
+        if not (x0 < source_x < x0 + lx and y0 < source_y < y0 + ly):
+            self.room.check_inside("the source", (source_x, source_y, self.source_height), time)
+        cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
+        centre_x = robot_x + self.array_offset * cos_h
+        centre_y = robot_y + self.array_offset * sin_h
+        for name, side in (("M1", 1.0), ("M2", 0.0), ("M3", -1.0)):
+            x = centre_x - side * self.mic_spacing * sin_h
+            y = centre_y + side * self.mic_spacing * cos_h
+            if not (x0 < x < x0 + lx and y0 < y < y0 + ly):
+                self.room.check_inside(f"the robot's microphone {name}", (x, y, self.mic_height),
+                                       time)
+
+    # ----- one fix from the inputs of the latest steps -------------------------------------
+    def records(self, table, time):
+        """Clean records (3, n) of the burst heard at ``time`` and the direct slant ranges.
+
+        Parameters
+        ----------
+        table : numpy.ndarray
+            :meth:`PoseHistory.table`, its last sample at ``time``.
+        time : float
+            The fix instant [s].
+
+        Returns
+        -------
+        records : numpy.ndarray
+            Shape (3, n): noise-free samples (before the ADC).
+        ranges : list of float
+            Direct paths from the source at emission to M1, M2, M3 [m].
+        """
+        (t_prev, *pose_prev), (t_now, *pose_now) = PoseHistory.latest_two(table)
+        mics = self.microphones(*pose_now)
+        velocity = ((mics - self.microphones(*pose_prev)) / (t_now - t_prev)
+                    if t_now > t_prev else np.zeros((3, 3)))
+        # Emission of the latest burst: its direct sound reaches M2 at `time`.
+        emission = time
+        for _ in range(3):
+            source = self._sources(table, [emission])[0]
+            emission = time - float(np.linalg.norm(mics[1] - source)) / self.speed_of_sound
+        emitted_at = emission - np.arange(self.earlier_bursts + 1) * self.burst_period
+        sounded = PoseHistory.emitting_at(table, emitted_at)
+        sounded[0] = True
+        return self.render(self._sources(table, emitted_at), sounded, mics, velocity,
+                           time - emission)
+
+    def _sources(self, table, times):
+        xy = PoseHistory.source_at(table, np.asarray(times, dtype=float)) - self.room.origin[:2]
+        return np.column_stack([xy, np.full(len(xy), self.source_height)])
+
+    def render(self, sources, sounded, mics, velocity, reference):
+        """Clean records (3, n) of the latest burst's record and the direct ranges.
+
+        The arguments are those of :meth:`arrivals`.
+        """
+        ranges = self.direct_ranges(sources[0], mics, velocity, reference)
+        start = (math.floor((min(ranges) / self.speed_of_sound - self.pre_roll)
+                            * self.sample_rate) / self.sample_rate)
+        window = (start - self.burst_duration, start + self.n_samples / self.sample_rate)
+        arrivals = self.arrivals(sources, sounded, mics, velocity, reference, window)
+        return self.renderer.render(arrivals.microphone, arrivals.delay, arrivals.gain, start,
+                                    self.n_samples), ranges
+
+    def direct_ranges(self, source, mics, velocity, reference):
+        """Direct paths [m] of the latest burst to M1, M2, M3 (moving microphones, see above)."""
+        ranges = []
+        for mic, speed in zip(mics, velocity):
+            guess = float(np.linalg.norm(mic - source))
+            moved = mic + speed * (guess / self.speed_of_sound - reference)
+            ranges.append(float(np.linalg.norm(moved - source)))
+        return ranges
+
+    # ----- the arrivals of given emissions -----------------------------------------------------
+    def arrivals(self, sources, sounded, mics, velocity, reference, window, detail=False):
+        """Arrivals of every image of every burst that start within ``window``.
+
+        Burst ``b`` is emitted ``b * burst_period`` before the latest (``b = 0``).
+
+        Parameters
+        ----------
+        sources : numpy.ndarray
+            Shape (B, 3): room-frame source position at each burst's emission.
+        sounded : numpy.ndarray of bool
+            Shape (B,): whether the source sounded burst ``b``.
+        mics : numpy.ndarray
+            Shape (3, 3): room-frame microphones (rows) at ``reference``.
+        velocity : numpy.ndarray
+            Shape (3, 3): their velocities [m/s].
+        reference : float
+            Instant of ``mics`` after the latest emission [s].
+        window : tuple of float
+            ``(first, last)`` [s] after the latest emission: arrivals starting in it.
+        detail : bool, optional
+            Only the arrivals in the window, with each one's burst, order, lattice row and
+            path; otherwise every candidate pair, those outside at zero gain (cheaper to
+            render than to select).
+
+        Returns
+        -------
+        Arrivals
+        """
+        c = self.speed_of_sound
+        lattice = self.lattice
+        first, last = window
+        # Candidates from the latest burst's images at the microphones as they are at
+        # `reference`, widened by how far the source and the microphones move meanwhile.
+        shift = sources - sources[0]
+        moved = float(np.max(np.linalg.norm(shift[sounded], axis=1)))
+        speed = float(np.max(np.linalg.norm(velocity, axis=1)))
+        spread = (moved + speed * (last - first + abs(reference - first)) + 1e-4) / c
+        # (3 microphones, N images) arrays, one coordinate at a time: numpy reduces a length-3
+        # axis slowly, and most images have a candidate burst in every fix.
+        # Only the images that can be reached within the cut (the lattice is sorted by reach).
+        count = lattice.within(c * (max(self.cut, last) + spread), sources[0], mics)
+        images = lattice.images(sources[0], count)
+        to_image = [images[k][None, :] - mics[:, k, None] for k in range(3)]
+        travel = _distance(*to_image)
+        travel /= c
+        reachable = (travel <= self.cut + spread) | (lattice.order[:count] == 0)
+        # Burst b reaches the window when travel - b T lies in it (+- spread).
+        last_burst = len(sounded) - 1
+        if self.burst_period > 0.0:
+            lowest = np.ceil((travel - last - spread) / self.burst_period)
+            np.maximum(lowest, 0.0, out=lowest)
+            highest = np.floor((travel - first + spread) / self.burst_period)
+            np.minimum(highest, float(last_burst), out=highest)
+        else:
+            lowest = np.zeros_like(travel)
+            highest = ((travel >= first - spread) & (travel <= last + spread)) - 1.0
+        moving = (moved > 0.0, speed > 0.0)
+        parts = []
+        for extra in range(max(int(np.max(highest - lowest)), 0) + 1):
+            burst = lowest + extra
+            candidate = burst <= highest
+            candidate &= reachable
+            burst = np.minimum(burst, float(last_burst)).astype(np.int64)
+            candidate &= sounded[burst]
+            # A second burst reaches the window only where it is longer than T (a few pairs).
+            pair = None if extra == 0 else np.flatnonzero(candidate)
+            parts.append(self._exact(to_image, travel, shift, burst, candidate, velocity,
+                                     reference, window, pair, moving, detail))
+        if detail:
+            return Arrivals(*(np.concatenate(column)
+                              for column in zip(*(vars(part).values() for part in parts))))
+        return Arrivals(*(np.concatenate([np.broadcast_to(a, part.gain.shape).ravel()
+                                          for a, part in zip(column, parts)])
+                          for column in zip(*((p.microphone, p.delay, p.gain) for p in parts))))
+
+    def _exact(self, to_image, travel, shift, burst, candidate, velocity, reference, window,
+               pair, moving, detail):
+        """The arrivals of (microphone, image) pairs for their burst.
+
+        Whole (3, N) arrays, the pairs that are not ``candidate`` at zero gain, or (with
+        ``pair``) the flat indices of a few of them. ``to_image`` and ``travel`` are the latest
+        burst's images seen from the microphones at ``reference``; an earlier burst's image
+        is displaced by its source's ``shift`` (mirrored), then each microphone moves on to
+        the arrival. The arrival instant that sets where the microphone is comes from
+        ``travel`` (exact for the latest burst; for earlier ones off by the source's
+        displacement, under 0.2 ms: 0.1 mm of array motion, a phase of the diffuse tail).
+        """
+        c = self.speed_of_sound
+        lattice = self.lattice
+        count = travel.shape[-1]
+        source_moved, microphones_moved = moving
+        if pair is None:
+            microphone, image = np.arange(3)[:, None], slice(0, count)
+            to_image = list(to_image)
+        else:
+            microphone, image = pair // count, pair % count
+            burst = burst.ravel()[pair]
+            candidate = np.ones(pair.size, dtype=bool)
+            to_image = [d.ravel()[pair] for d in to_image]
+            travel = travel.ravel()[pair]
+        offset = burst * -self.burst_period
+        if source_moved:
+            for axis in range(3):
+                to_image[axis] = to_image[axis] + lattice.signs[axis][image] \
+                    * np.ascontiguousarray(shift[:, axis])[burst]
+        if microphones_moved:
+            lag = travel + offset
+            lag -= reference
+            for axis in range(3):
+                to_image[axis] = to_image[axis] - velocity[:, axis][microphone] * lag
+        if source_moved or microphones_moved:
+            path = _distance(*to_image)
+        else:
+            path = travel * c
+        delay = path / c
+        delay += offset
+        keep = (delay > window[0]) & (delay < window[1])
+        keep &= candidate
+        gain = (_SPAN * lattice.attenuation[image]) / path
+        if not detail:
+            gain *= keep
+            return Arrivals(microphone, delay, gain)
+        shape = keep.shape
+        return Arrivals(np.broadcast_to(microphone, shape)[keep], delay[keep], gain[keep],
+                        burst[keep], np.broadcast_to(lattice.order[image], shape)[keep],
+                        np.broadcast_to(np.arange(count)[image], shape)[keep], path[keep])
+
+    # ----- static geometry (validation, benchmarks) ------------------------------------------
+    def static_records(self, source, mics, earlier=True):
+        """Clean records (3, n) and direct ranges for bodies at rest (room-frame positions).
+
+        ``earlier``: the source has sounded every ``burst_period`` long enough for every
+        earlier burst within the cut to be heard (the steady state); otherwise one burst.
+        """
+        source = np.asarray(source, dtype=float)
+        mics = np.asarray(mics, dtype=float)
+        count = self.earlier_bursts + 1
+        sounded = np.zeros(count, dtype=bool)
+        sounded[:count if earlier else 1] = True
+        reference = float(np.linalg.norm(mics[1] - source)) / self.speed_of_sound
+        return self.render(np.tile(source, (count, 1)), sounded, mics, np.zeros((3, 3)),
+                           reference)
+
+    def response(self, source, mics, duration):
+        """Noise-free records (3, m) of one burst from its emission to ``duration`` [s].
+
+        Bodies at rest (room-frame positions); every image within the time cut. The energy
+        decay of this response is what the room's RT60 is checked against.
+        """
+        source = np.asarray(source, dtype=float)
+        arrivals = self.arrivals(source[None, :], np.ones(1, dtype=bool),
+                                 np.asarray(mics, dtype=float), np.zeros((3, 3)), 0.0,
+                                 (-self.burst_duration, duration))
+        return self.renderer.render(arrivals.microphone, arrivals.delay, arrivals.gain, 0.0,
+                                    int(math.ceil(duration * self.sample_rate)))
