@@ -10,6 +10,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from orchestrator.processes import tied_command
+
 __all__ = ["FmuReport", "validate_fmu", "validate_fmus"]
 
 
@@ -67,8 +69,10 @@ def validate_fmus(paths, simulate=True):
 def _fmutool_check(path):
     tool = Path(sys.executable).parent / "fmutool"
     command = [str(tool)] if tool.exists() else [sys.executable, "-m", "fmu_manipulation_toolbox"]
-    completed = subprocess.run(command + ["-input", str(path), "-check"], capture_output=True,
-                               text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    # tied: the checker and the simulation child end with this process (docs/process_lifetime.md)
+    completed = subprocess.run(tied_command(command + ["-input", str(path), "-check"]),
+                               capture_output=True, text=True,
+                               env={**os.environ, "PYTHONUNBUFFERED": "1"})
     lines = (completed.stdout + completed.stderr).splitlines()
     errors = [line.split("|", 1)[-1].strip() for line in lines if line.startswith("ERROR")]
     if completed.returncode != 0 and not errors:
@@ -112,7 +116,8 @@ def _short_simulation(path):
             stop = min(stop, float(experiment.stopTime))
         if experiment.stepSize is not None:
             step = float(experiment.stepSize)
-    completed = subprocess.run([sys.executable, "-c", _SIMULATE, str(path), str(stop), str(step)],
+    completed = subprocess.run(tied_command([sys.executable, "-c", _SIMULATE, str(path),
+                                             str(stop), str(step)]),
                                capture_output=True, text=True, timeout=600)
     if completed.returncode != 0:
         return [f"the simulation process died with status {completed.returncode}: "

@@ -15,6 +15,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from orchestrator.processes import tied_command
+
 __all__ = ["ecos_binary", "ecos_environment", "run_ecos", "read_ecos_csv"]
 
 
@@ -70,8 +72,9 @@ def run_ecos(binary, path, stop_time, step, out_dir, parameter_set=None, timeout
                "--stepSize", repr(step), "--noParallel"]
     if parameter_set is not None:
         command += ["--parameterSet", parameter_set]
-    completed = subprocess.run(command, cwd=out_dir, capture_output=True, text=True,
-                               env=ecos_environment(), timeout=timeout)
+    # tied: ecos ends with this process, however it dies (docs/process_lifetime.md)
+    completed = subprocess.run(tied_command(command), cwd=out_dir, capture_output=True,
+                               text=True, env=ecos_environment(), timeout=timeout)
     found = sorted(out_dir.glob("*.csv"))
     return completed, (found[0] if found else None)
 
