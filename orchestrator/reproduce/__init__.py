@@ -12,8 +12,10 @@ threshold. Nothing is tuned to the paper.
 Modules: :mod:`.experiments` (cells as data), :mod:`.tolerances` (draws), :mod:`.runs`
 (sweeps, reading runs), :mod:`.measures` (per-run figures), :mod:`.analysis` (per-cell
 figures), :mod:`.statistics` (intervals, verdicts), :mod:`.tables_motion` and
-:mod:`.tables_tracking` (tables, claims, paper ratios), :mod:`.figures` and
-:mod:`.plotting`, :mod:`.report` (JSON, Markdown, HTML), :mod:`.study` and :mod:`.cli`.
+:mod:`.tables_tracking` (tables, claims, paper ratios), :mod:`.acoustics` (free field or the
+room of ``scenarios/room.toml`` for the fix-dependent tables), :mod:`.side_by_side` (their
+claims in both conditions), :mod:`.figures` and :mod:`.plotting`, :mod:`.report` (JSON,
+Markdown, HTML), :mod:`.study` and :mod:`.cli`.
 """
 
 from .cli import register_cli

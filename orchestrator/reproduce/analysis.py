@@ -7,7 +7,7 @@ import numpy as np
 from orchestrator.reproduce.geometry import tangent_arc_path
 
 from .experiments import TABLE13_TARGET
-from .measures import arrival_figures, tracking_figures, wheel_profile
+from .measures import arrival_figures, fix_figures, tracking_figures, wheel_profile
 from .statistics import mean_interval, paired_difference
 
 __all__ = ["START", "START_HEADING", "CASE_TARGETS", "Analysis", "reference_path"]
@@ -60,13 +60,14 @@ class Analysis:
                 if not run.ok:
                     out.append(None)
                 elif "path" in labels:
-                    out.append(tracking_figures(run, SEC62_STOP_DISTANCE))
+                    out.append({**tracking_figures(run, SEC62_STOP_DISTANCE),
+                                **fix_figures(run)})
                 else:
                     figures = arrival_figures(run, reference_path(labels))
                     if "case" in labels:
                         segments = 2 if labels["case"] == "dynamic" else 1
                         figures["wheels"] = wheel_profile(run, segments)
-                    out.append(figures)
+                    out.append({**figures, **fix_figures(run)})
             out += [None] * (self.runs - len(out))
             self._figures[cell] = out
         return self._figures[cell]

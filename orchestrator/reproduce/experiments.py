@@ -11,13 +11,16 @@ all (:func:`configuration`).
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from .acoustics import FIX_DEPENDENT, FREE_FIELD, ROOM
 
 __all__ = ["TABLES", "PAPER_SPEEDS", "CONTROLLERS", "FEEDFORWARD", "FRICTIONS", "RECORDED",
            "TABLE13_TARGET", "TABLE13_A_MAX", "TABLE13_V_MAX", "STOP_DISTANCE",
-           "TRACK_STOP_TIME", "PD_FORMS", "SEC62_SOURCE_START", "SEC62_MODES",
-           "TABLE67_TRACK_WIDTH", "Cell", "Experiment", "plan", "t89_cell",
+           "TRACK_STOP_TIME", "PD_FORMS", "SEC62_SOURCE_START", "SEC62_SOURCE_END_Y",
+           "SEC62_SOURCE_LENGTH", "SEC62_MODES",
+           "TABLE67_TRACK_WIDTH", "Cell", "Experiment", "plan", "in_room", "t89_cell",
            "table13_stop_time", "configuration"]
 
 TABLES = ("table1", "table2", "table3", "table6", "table7", "table8", "table9", "sec6_2")
@@ -42,6 +45,11 @@ TRACK_STOP_TIME = 40.0
 # The distance is not printed; the shipped scenarios start the source 1 m from the robot, so
 # it starts 1 m away at 45 deg right, facing forward (+y) like the robot.
 SEC62_SOURCE_START = (math.sqrt(0.5), math.sqrt(0.5))
+# The source stops where scenarios/room.toml's does, 0.5 m short of the far wall of the
+# paper's 7 m room (y = 6 m with the robot 0.5 m from the near wall): 5.29 m of path instead
+# of the default 6, in free field too, so that the two acoustic conditions share one geometry.
+SEC62_SOURCE_END_Y = 6.0
+SEC62_SOURCE_LENGTH = SEC62_SOURCE_END_Y - SEC62_SOURCE_START[1]
 # Figs. 7-8 compare the curvature planner with rotate-then-go on both paths.
 SEC62_MODES = ("curvature", "rotate_then_go")
 # Tables 6-7 reproduce the paper's wheel figures only with a 0.40 m track (docs/errata.md):
@@ -68,7 +76,8 @@ RECORDED = ["source.x", "source.y", "source.emitting", "plant.x", "plant.y", "pl
             "plant.wheel_speed_right", "plant.encoder_left", "plant.encoder_right",
             "plant.slip_left", "plant.slip_right", "planner.v_ref_left", "planner.v_ref_right",
             "planner.radius", "planner.curvature", "localizer.valid", "localizer.distance",
-            "localizer.bearing"]
+            "localizer.bearing", "localizer.true_distance", "localizer.true_bearing",
+            "localizer.measurement_id", "localizer.fix_attempts"]
 
 
 @dataclass(frozen=True)
@@ -85,12 +94,20 @@ class Cell:
         Overrides of this cell on top of the experiment's.
     labels : dict
         What the cell stands for (speed, mode, case, control, feedforward, friction, path).
+    condition : str
+        The acoustic condition (:mod:`orchestrator.reproduce.acoustics`): free field or room.
     """
 
     name: str
     experiment: str
     parameters: dict
     labels: dict
+    condition: str = FREE_FIELD
+
+    @property
+    def key(self):
+        """Unique over the study: the name in free field, ``room:<name>`` in the room."""
+        return self.name if self.condition == FREE_FIELD else f"{self.condition}:{self.name}"
 
 
 @dataclass
@@ -130,7 +147,7 @@ def t89_cell(case, control, ff, friction, form="as_built"):
     return f"t89_{case}_{control}_{ff}_{friction}{suffix}"
 
 
-def plan(selected, speeds, forms=("as_built",)):
+def plan(selected, speeds, forms=("as_built",), room=None):
     """The experiments (with their cells) needed for the selected tables.
 
     Parameters
@@ -141,6 +158,10 @@ def plan(selected, speeds, forms=("as_built",)):
         Speeds of Tables 1-3.
     forms : sequence of str
         Keys of :data:`PD_FORMS` to run the FGS-PD cells of Tables 8-9 with.
+    room : Room, optional
+        The room condition (:func:`orchestrator.reproduce.acoustics.load_room`): the
+        experiments of the selected :data:`~orchestrator.reproduce.acoustics.FIX_DEPENDENT`
+        tables run once more in it, as ``<experiment>_room`` with the same cells.
 
     Returns
     -------
@@ -176,6 +197,8 @@ def plan(selected, speeds, forms=("as_built",)):
                                 if mu is not None:
                                     parameters["plant.mu"] = mu
                                 if PD_FORMS[form] is not None:
+                                    # the trim is the paper form's (components/control)
+                                    parameters.update(_both("form", "paper"))
                                     parameters.update(_both("trim_ki", PD_FORMS[form]))
                                 experiment.cells.append(Cell(
                                     t89_cell(case, control, ff, friction, form),
@@ -192,7 +215,8 @@ def plan(selected, speeds, forms=("as_built",)):
     if "sec6_2" in selected:
         experiment = Experiment(
             "sec6_2", "Sec. 6.2, straight and S-curve", "s_curve.toml", TRACK_STOP_TIME,
-            {"source.x0": SEC62_SOURCE_START[0], "source.y0": SEC62_SOURCE_START[1]})
+            {"source.x0": SEC62_SOURCE_START[0], "source.y0": SEC62_SOURCE_START[1],
+             "source.length": SEC62_SOURCE_LENGTH})
         for path in ("straight", "s_curve"):
             for mode in SEC62_MODES:
                 experiment.cells.append(Cell(
@@ -204,10 +228,31 @@ def plan(selected, speeds, forms=("as_built",)):
                 {"source.path": path, "planner.mode": "curvature", **_both("mode", "pid")},
                 {"path": path, "mode": "curvature", "control": "pid"}))
         experiments.append(experiment)
+    if room is not None:
+        experiments += [in_room(e, room) for e in experiments
+                        if _tables_of(e.name) & set(FIX_DEPENDENT) & selected]
     return experiments
 
 
-def configuration(forms=("as_built",)):
+def _tables_of(experiment):
+    """The tables an experiment (by name) serves."""
+    if experiment.startswith("table13_"):
+        return {"table1", "table2", "table3"}
+    if experiment.startswith("table89_"):
+        return {"table6", "table7", "table8", "table9"}
+    return {"sec6_2"} if experiment == "sec6_2" else set()
+
+
+def in_room(experiment, room):
+    """The experiment once more in the room: its overrides plus the room's, the same cells."""
+    name = f"{experiment.name}_{ROOM}"
+    return Experiment(name, f"{experiment.title}, in the room", experiment.scenario,
+                      experiment.stop_time, {**experiment.parameters, **room.parameters},
+                      [replace(cell, experiment=name, condition=ROOM)
+                       for cell in experiment.cells])
+
+
+def configuration(forms=("as_built",), room=None):
     """The study's stated assumptions, as printed at the top of the report."""
     form = ("FGS-PD as built has an integral trim (trim_ki, docs/control.md); Tables 8-9 "
             "also run it as the pure PD of Eq. (46) (trim_ki = 0)" if "pure_pd" in forms else
@@ -236,6 +281,13 @@ def configuration(forms=("as_built",)):
         "tables_8_9": "scenarios static_case1.toml / dynamic_case2.toml, planner stop "
                       f"distance {STOP_DISTANCE} m, 12 s",
         "sec_6_2": "source starts 1 m away at 45 deg right of the robot (paper Sec. 6.2.1), "
-                   "drives its straight or S-curve path at 0.2 m/s and mutes at the end; "
+                   "drives its straight or S-curve path at 0.2 m/s for "
+                   f"{SEC62_SOURCE_LENGTH:.3g} m (ending 0.5 m short of the far wall of the "
+                   "paper's 7 m room) and mutes at the end; "
                    f"planner stop distance 0.5 m; {TRACK_STOP_TIME:g} s",
+        "acoustics": ("free field (the localizer's default) for every experiment" if room is None
+                      else "free field for every experiment; Tables 1-3 and Sec. 6.2 (Figs. "
+                      "7-8, 25, 29) also in the room, " + room.describe() + ", the robot at "
+                      "(0, 0) facing +y as there: 0.5 m from the wall behind it, centred "
+                      "across the room; run i shares its draws in both conditions"),
     }

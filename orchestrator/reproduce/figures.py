@@ -16,7 +16,7 @@ from .analysis import CASE_TARGETS, reference_path
 from .plotting import COLOURS, band, paths, save, traces
 from .report import Figure
 
-__all__ = ["write_figures"]
+__all__ = ["write_figures", "write_room_figures"]
 
 _LABEL = {"pid": "CPID", "fgs_pd": "CFGS-PD", "curvature": "curvature",
           "rotate_then_go": "rotate then go (without curvature)"}
@@ -193,7 +193,7 @@ def _relative(run):
             "valid": valid}
 
 
-def _estimates(study, out, path, number, name, which):
+def _estimates(study, out, path, number, name, which, where=""):
     """Figs. 25 / 29 (x, y, theta) and 26 / 30 (distance, angle) of the heard source."""
     plt = pyplot()
     runs = [r for r in study.of(f"sec62_{path}_curvature_fgs_pd") if r.ok]
@@ -219,8 +219,10 @@ def _estimates(study, out, path, number, name, which):
         ax.legend(fontsize=7)
     axes[-1].set_xlabel("time [s]")
     what = "estimated source x, y, theta" if which == "xyt" else "distance and angle"
-    fig.suptitle(f"Fig. {number}: {what}, {path} path (run 1 of {len(runs)}), robot frame")
-    return Figure(f"Fig. {number}", f"{path} path: {what} of the source relative to the robot, "
+    fig.suptitle(f"Fig. {number}: {what}, {path} path{where} (run 1 of {len(runs)}), "
+                 "robot frame")
+    return Figure(f"Fig. {number}", f"{path} path{where}: {what} of the source relative to "
+                  "the robot, "
                   "heard vs true (first run; the tables hold all runs)",
                   save(fig, out / name), ["true", "heard"])
 
@@ -280,6 +282,20 @@ def _speed_trends(analysis, out, speeds):
     return Figure("Tables 1-3", "final error, driven radius and path RMSE over the speed "
                   "(mean and 95 % interval)", save(fig, out / "table1_3_speed_trends.png"),
                   [_LABEL["rotate_then_go"], _LABEL["curvature"]])
+
+
+def write_room_figures(study, out_dir):
+    """Figs. 25 and 29 from the room's runs (``fig25_straight_estimates_room.png``, ...)."""
+    out = out_dir / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for path, number, tag in (("straight", 25, "straight"), ("s_curve", 29, "scurve")):
+        figure = _estimates(study, out, path, number, f"fig{number}_{tag}_estimates_room.png",
+                            "xyt", where=" in the room")
+        if figure is not None:
+            figure.path = f"figures/{figure.path.name}"
+            written.append(figure)
+    return written
 
 
 def write_figures(study, analysis, out_dir, speeds, bounds):

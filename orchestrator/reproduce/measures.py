@@ -14,7 +14,7 @@ from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_
 
 __all__ = ["DEFINITIONS", "ENCODER_PPR", "NOMINAL_WHEEL_RADIUS", "SLIP_THRESHOLD",
            "arrival_figures", "slip_figures", "wheel_profile", "tracking_figures",
-           "first_heading_change"]
+           "fix_figures", "first_heading_change"]
 
 ENCODER_PPR = 728               # counts per wheel revolution (docs/plant.md)
 NOMINAL_WHEEL_RADIUS = 0.06     # m; the robot's own conversion of counts to distance
@@ -55,6 +55,15 @@ DEFINITIONS = {
     "inward_offset_m": "at each apex of the source's S-curve, the source's lateral offset minus "
                        "the robot's at the same forward coordinate, signed towards the curve's "
                        "centre (> 0: the robot runs inside); the smaller of the two apexes",
+    "fix_range_rmse_m": "RMS of (heard - true) range over the run's valid fixes, each fix once "
+                        "(localizer.distance - localizer.true_distance where measurement_id "
+                        "has just grown and valid is true)",
+    "fix_range_bias_m": "mean of (heard - true) range over the same fixes",
+    "fix_bearing_rmse_deg": "RMS of (heard - true) bearing over the same fixes, wrapped to "
+                            "+-180 deg",
+    "fix_valid_fraction": "valid fixes / fix attempts while the source sounds "
+                          "(localizer.measurement_id / localizer.fix_attempts at the last "
+                          "sounding sample)",
 }
 
 
@@ -172,6 +181,27 @@ def wheel_profile(run, segments=1):
             figures[f"{side}_encoder_m"] = float((counts[last] - counts[start]) * per_count)
         profiles.append(figures)
     return profiles
+
+
+def fix_figures(run):
+    """How well the localizer heard: range and bearing errors of the fixes, valid share."""
+    data = run.data
+    ids, valid = data["localizer.measurement_id"], data["localizer.valid"] > 0.5
+    new = valid & (np.diff(ids, prepend=0.0) > 0)
+    range_error = (data["localizer.distance"] - data["localizer.true_distance"])[new]
+    bearing_error = np.degrees(np.angle(np.exp(1j * (data["localizer.bearing"]
+                                                     - data["localizer.true_bearing"])[new])))
+    sounding = np.nonzero(data["source.emitting"] > 0.5)[0]
+    last = sounding[-1] if len(sounding) else len(ids) - 1
+    attempts = data["localizer.fix_attempts"][last]
+    return {
+        "fix_range_rmse_m": (float(np.sqrt(np.mean(range_error ** 2)))
+                             if len(range_error) else None),
+        "fix_range_bias_m": float(range_error.mean()) if len(range_error) else None,
+        "fix_bearing_rmse_deg": (float(np.sqrt(np.mean(bearing_error ** 2)))
+                                 if len(bearing_error) else None),
+        "fix_valid_fraction": float(ids[last] / attempts) if attempts > 0 else None,
+    }
 
 
 def tracking_figures(run, stop_distance):

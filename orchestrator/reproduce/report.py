@@ -192,6 +192,7 @@ class Report:
     comparisons: list
     figures: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    side_by_side: object = None     # SideBySide: the fix-dependent claims in free field and room
     out_dir: Path = None
     markdown_path: Path = None
     json_path: Path = None
@@ -214,7 +215,9 @@ class Report:
                 "claims": [c.to_dict() for c in self.claims],
                 "verdicts": self.verdict_counts(),
                 "paper_ratios": [c.to_dict() for c in self.comparisons],
-                "figures": [f.to_dict() for f in self.figures]}
+                "figures": [f.to_dict() for f in self.figures],
+                "free_field_and_room": (self.side_by_side.to_dict()
+                                        if self.side_by_side is not None else None)}
 
     def document(self):
         """The report as one document, rendered to both Markdown and HTML."""
@@ -238,9 +241,10 @@ class Report:
         section.table(["parameter", "band", "justification"],
                       [[Code(t.parameter), t.band(), t.justification] for t in self.tolerances])
         counts = self.verdict_counts()
+        room = [self.side_by_side.headline()] if self.side_by_side is not None else []
         document.summarize([(verdict, counts.get(verdict, 0), _TONES[verdict])
                             for verdict in (SUPPORTED, NOT_SUPPORTED, INCONCLUSIVE)],
-                           _headlines(self.claims))
+                           room + _headlines(self.claims))
         section = document.section("Claims and verdicts")
         section.paragraph([
             f"Each claim is judged on the {level} % interval of the quantity in 'measure' (a "
@@ -261,6 +265,8 @@ class Report:
                                 c.paper, Verdict(c.verdict, _TONES[c.verdict]),
                                 c.likely_reason()] for c in claims],
                               caption=f"Claims {verdict} ({len(claims)})")
+        if self.side_by_side is not None:
+            self.side_by_side.add_to(document)
         section = document.section("Figures")
         for figure in self.figures:
             section.figure(figure.path, f"{figure.name}: {figure.caption}", alt=figure.name)

@@ -57,6 +57,13 @@ class StudyRuns:
         """The runs of a cell (an empty list if it was not run)."""
         return self.cells.get(cell, [])
 
+    def condition(self, cells):
+        """The runs of the given cells (:class:`~orchestrator.reproduce.experiments.Cell`,
+        one acoustic condition), under the cells' names: what :class:`Analysis` reads."""
+        return StudyRuns({cell.name: self.cells[cell.key] for cell in cells
+                          if cell.key in self.cells},
+                         computed=self.computed, reused=self.reused, out_dir=self.out_dir)
+
 
 def read_results(run_dir):
     """A run's ``results.csv`` as ``{column: array}`` (Booleans as 0/1)."""
@@ -141,7 +148,7 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
                 overrides = {k: v for k, v in point.items() if k != "seed"}
                 scenarios.append(base.with_overrides(name=experiment.name, seed=point["seed"],
                                                      parameters=overrides))
-                settings.append({"cell": cell.name, "index": index, **point})
+                settings.append({"cell": cell.key, "index": index, **point})
     result = run_many(scenarios, out_dir / "runs", settings=settings, fmu_dir=fmu_dir,
                       scheduler=scheduler, workers=workers, progress=progress)
     study = StudyRuns({}, computed=result.computed, reused=result.reused, out_dir=out_dir)

@@ -6,13 +6,15 @@ from pathlib import Path
 
 from components.common.errors import ConfigError
 
+from .acoustics import CONDITIONS, FIX_DEPENDENT, FREE_FIELD, ROOM, check_room_fits, load_room
 from .analysis import Analysis
 from .experiments import PAPER_SPEEDS, TABLES, configuration, plan
-from .figures import write_figures
+from .figures import write_figures, write_room_figures
 from .measures import DEFINITIONS
 from .paper import load_paper_tables
 from .report import Report
 from .runs import run_study
+from .side_by_side import side_by_side
 from .tables_motion import motion_tables, profile_tables
 from .tables_tracking import (condition_summary, controller_tables, tracking_bounds,
                               tracking_tables)
@@ -61,9 +63,18 @@ def _pd_forms(fmu_dir):
     return ("as_built", "pure_pd") if "trim_ki" in names else ("as_built",)
 
 
+def _fix_dependent_claims(analysis, selected, speeds, paper):
+    """The claims of the fix-dependent tables (Tables 1-3, Sec. 6.2) on one condition's runs."""
+    selected = selected & set(FIX_DEPENDENT)
+    claims = motion_tables(analysis, selected, speeds, paper)[1]
+    if "sec6_2" in selected:
+        claims += tracking_tables(analysis)[1]
+    return claims
+
+
 def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, speeds=None,
               scheduler=None, runs=RUNS_PER_CELL, study_seed=0, stop_time_scale=1.0,
-              tolerances=None):
+              tolerances=None, conditions=CONDITIONS, room=None):
     """Run the paper's experiments as a Monte Carlo study and write the report.
 
     Parameters
@@ -92,6 +103,12 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
         Factor on every stop time; 1 for the study, less only for a quick test of the code.
     tolerances : path-like, optional
         Tolerance file instead of ``orchestrator/data/tolerances.toml``.
+    conditions : sequence of str
+        Acoustic conditions (:data:`~orchestrator.reproduce.acoustics.CONDITIONS`): free field
+        always; with ``"room"`` the fix-dependent tables run in the room too and the report
+        sets both side by side.
+    room : path-like, optional
+        Scenario whose ``localizer.*`` parameters are the room (default ``scenarios/room.toml``).
 
     Returns
     -------
@@ -107,19 +124,31 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
     if not 0.0 < float(stop_time_scale) <= 1.0:
         raise ConfigError(f"stop_time_scale = {stop_time_scale!r}: must be in (0, 1]")
     selected, speeds = check_selection(tables, speeds)
+    unknown = [c for c in conditions if c not in CONDITIONS]
+    if unknown or FREE_FIELD not in conditions:
+        raise ConfigError(f"conditions: {list(conditions)!r}: valid choices are "
+                          f"{', '.join(CONDITIONS)}, and {FREE_FIELD} must be among them")
+    room_condition = (load_room(room) if ROOM in conditions and selected & set(FIX_DEPENDENT)
+                      else None)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     paper = load_paper_tables()
     tolerance_list = load_tolerances(tolerances)
     forms = _pd_forms(fmu_dir)
-    experiments = plan(selected, speeds, forms)
+    experiments = plan(selected, speeds, forms, room_condition)
+    clearance = (check_room_fits([e for e in experiments if e.cells[0].condition == ROOM],
+                                 room_condition) if room_condition else {})
     started = time.perf_counter()
     study = run_study(experiments, tolerance_list, runs, out_dir, fmu_dir=fmu_dir,
                       workers=workers, scheduler=scheduler, progress=progress,
                       study_seed=study_seed, stop_time_scale=stop_time_scale)
     run_seconds = time.perf_counter() - started
-    cells = {cell.name: cell for e in experiments for cell in e.cells}
-    analysis = Analysis(study, cells, runs)
+    by_condition = {}
+    for experiment in experiments:
+        for cell in experiment.cells:
+            by_condition.setdefault(cell.condition, {})[cell.name] = cell
+    cells = by_condition[FREE_FIELD]
+    analysis = Analysis(study.condition(cells.values()), cells, runs)
 
     report_tables, claims, ratios = {}, [], []
     for builder in (lambda: motion_tables(analysis, selected, speeds, paper),
@@ -141,15 +170,27 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
         ordered = {"conditions": summary, **ordered}
     ratios.sort(key=lambda c: int(c.table.split()[-1]))
 
+    compared = None
+    if room_condition is not None:
+        room_cells = by_condition[ROOM]
+        room_analysis = Analysis(study.condition(room_cells.values()), room_cells, runs)
+        compared = side_by_side(_fix_dependent_claims(analysis, selected, speeds, paper),
+                                _fix_dependent_claims(room_analysis, selected, speeds, paper),
+                                {FREE_FIELD: analysis, ROOM: room_analysis}, room_condition,
+                                clearance)
+    all_cells = sum(len(c) for c in by_condition.values())
     settings = {"tables": sorted(selected, key=TABLES.index), "speeds": list(speeds),
-                "runs_per_cell": runs, "cells": len(cells), "runs_total": len(cells) * runs,
+                "conditions": sorted(by_condition, key=CONDITIONS.index),
+                "runs_per_cell": runs, "cells": all_cells, "runs_total": all_cells * runs,
                 "runs_computed": study.computed, "runs_reused": study.reused,
                 "failed_runs": analysis.failures(), "study_seed": study_seed,
                 "stop_time_scale": stop_time_scale, "workers": workers or os.cpu_count(),
                 "scheduler": "given" if scheduler else "local",
                 "run_time_s": run_seconds}
-    report = Report(configuration(forms), tolerance_list, DEFINITIONS, ordered, claims, ratios,
-                    settings=settings, out_dir=out_dir)
-    report.figures = write_figures(study, analysis, out_dir, speeds, tracking_bounds())
+    report = Report(configuration(forms, room_condition), tolerance_list, DEFINITIONS, ordered,
+                    claims, ratios, settings=settings, side_by_side=compared, out_dir=out_dir)
+    report.figures = write_figures(analysis.study, analysis, out_dir, speeds, tracking_bounds())
+    if compared is not None:
+        report.figures += write_room_figures(room_analysis.study, out_dir)
     report.settings["wall_time_s"] = time.perf_counter() - started
     return report.write(out_dir)

@@ -34,6 +34,8 @@ FIGURES = {
     "fig29_scurve_estimates.png": ["true", "heard"],
     "fig30_scurve_distance_angle.png": ["true", "heard"],
     "table1_3_speed_trends.png": [RTG, "curvature"],
+    "fig25_straight_estimates_room.png": ["true", "heard"],
+    "fig29_scurve_estimates_room.png": ["true", "heard"],
 }
 
 
@@ -85,7 +87,9 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
     # Table 6 from the simulated wheels: every row has a simulated mean beside the paper's
     assert all(row["ratio"] is not None for row in data["paper_ratios"]
                if row["table"] == "Table 6")
-    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 36
+    # 36 free-field cells, and Tables 1-3 (2 speeds x 2 modes) and Sec. 6.2 (6) in the room
+    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 46
+    assert data["settings"]["conditions"] == ["free_field", "room"]
     assert "integral trim" in data["configuration"]["pd_form"]
     text = (out / "reproduction.md").read_text() + (out / "reproduction.json").read_text()
     assert str(out) not in text and "/tmp" not in text
@@ -117,8 +121,44 @@ def test_html_report_shows_every_figure(study):
     assert seen["verdict_cells"] >= len(report.claims) and seen["unclassed_verdicts"] == []
 
 
+def test_every_fix_dependent_claim_is_judged_in_both_conditions_side_by_side(study):
+    out, report = study
+    data = json.loads((out / "reproduction.json").read_text())["free_field_and_room"]
+    # the free-field claims of Tables 1-3 and Sec. 6.2 (not Tables 8-9), each with a room twin
+    fix_dependent = [c for c in report.claims
+                     if c.source.startswith(("Table 1", "Table 2", "Table 3", "Sec. 3.6",
+                                             "Sec. 6.2", "Figs. 7-8"))]
+    # Tables 1-2: four slopes; Table 3: one per speed (2); Sec. 6.2: six per path, and the
+    # S-curve's inside claim
+    assert len(data["claims"]) == len(fix_dependent) == 4 + 2 + 2 * 6 + 1
+    assert all(p["free_field"] and p["room"] for p in data["claims"])
+    assert data["room"]["parameters"]["localizer.room"] is True
+    assert data["room"]["parameters"]["localizer.rt60"] == 0.4
+    assert data["failed_runs"] == {}
+    # the room's runs heard the room: their fixes err more than free field's (measured)
+    for row in data["fix_accuracy"]:
+        free, room = (row["fix_bearing_rmse_deg"][c]["mean"] for c in ("free field", "room"))
+        assert room > 10 * free, row["cell"]
+    differing = [p for p in data["claims"] if p["differs"]]
+    assert all(p["free_field"]["verdict"] != p["room"]["verdict"] for p in differing)
+    assert all(p["why"].startswith("Measured: effect") for p in differing)
+    markdown = (out / "reproduction.md").read_text()
+    section = markdown.split("## Free field and room")[1].split("\n## ")[0]
+    assert "| free field | room |" in section
+    lines = section.splitlines()
+    for pair in data["claims"]:   # one row per claim: the free-field verdict, then the room's
+        verdicts = f"| **{pair['free_field']['verdict']}** | **{pair['room']['verdict']}** |"
+        assert any(pair["claim"].replace("|", "\\|") in line and verdicts in line
+                   for line in lines), pair["claim"]
+    assert f"Claims whose verdict differs between free field and room ({len(differing)})" \
+        in section
+    assert "scenarios/room.toml" in section
+
+
 def test_a_second_call_reuses_every_finished_run(study, fmu_dir):
+    # last: it rewrites the report folder with Tables 1-3 alone
     out, _ = study
     again = reproduce(out, fmu_dir=fmu_dir, workers=1, progress=False, runs=2,
                       stop_time_scale=0.25, speeds=(0.4, 0.5), tables=("table1",))
-    assert again.settings["runs_computed"] == 0 and again.settings["runs_reused"] == 8
+    # Tables 1-3's 4 cells x 2 runs, in free field and in the room
+    assert again.settings["runs_computed"] == 0 and again.settings["runs_reused"] == 16
