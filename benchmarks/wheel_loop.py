@@ -1,12 +1,25 @@
-"""Closed-loop wheel-speed comparison on the RobotPlant core: FGS-PD against the paper's CPID.
+"""The wheel-speed loop's figures per design: the default form, the paper's form, the CPID.
 
-The paper's Case 1 (Table 6), run by :mod:`orchestrator.verify.case1` (the same code
-``sonotrack verify`` judges the paper's overshoot claim with) for every controller form, and
-printed as the table of docs/control.md. Run: ``.venv/bin/python benchmarks/wheel_loop.py``.
+Per design (the same experiments ``sonotrack verify`` judges, :mod:`orchestrator.verify`):
+2 % settling of a 0.3 m/s step on wheels with x0.25 / x1 / x4 RobotPlant's DC gain, recovery
+from a load-torque step of 20 % of stall, creep after a stop, each on the discrete-time loop;
+overshoot on paper Case 1's ramp (RobotPlant core, :mod:`orchestrator.verify.case1`); the 5-95 %
+spread of the scheduled kp and kd in paper Cases 1 and 2 (``scenarios/static_case1.toml``,
+``scenarios/dynamic_case2.toml``, the whole system through the FMUs). Then the measurement
+behind the requirements' judged range (``family``: the best any PD/PID with feedforward can do
+over the issue's whole grid, and the two corners that pull the gains apart), and the four
+shipped scenarios' summary figures in both forms (``scenarios``).
+
+Run: ``.venv/bin/python benchmarks/wheel_loop.py`` (``--quick`` for a short check: one
+scenario, a small family search) -> ``benchmarks/results/wheel_loop.json``.
 """
 
+import argparse
+import itertools
 import json
+import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -14,30 +27,210 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+import numpy as np  # noqa: E402
+
+from components.control import DEFAULTS  # noqa: E402
+from components.plant import PlantParameters  # noqa: E402
 from orchestrator.verify.case1 import (  # noqa: E402,F401  (re-exported for the tests)
     CASE1, CONFIGS, SETTLING_BAND, compare, run_case1, trapezoid, wheel_metrics,
 )
+from orchestrator.verify.checks import load_requirements  # noqa: E402
+from orchestrator.verify.designs import DESIGNS, design_settings  # noqa: E402
+from orchestrator.verify.requirement_runs import run_model_experiment  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results" / "wheel_loop.json"
+SCENARIOS = ("s_curve", "straight", "static_case1", "dynamic_case2")
 
 
-def main():
-    start = time.perf_counter()
-    results = compare()
-    elapsed = time.perf_counter() - start
-    header = f"{'controller':20s} {'wheel':6s} {'overshoot %':>11s} {'settle s':>9s} " \
-             f"{'RMS mm/s':>9s} {'mean e mm/s':>11s} {'dither mm/s':>11s}"
-    print(header)
-    for name, sides in results.items():
-        for side, m in sides.items():
-            settle = m["settling_time_s"]
-            settle = f"{settle:9.2f}" if settle is not None else f"{'never':>9s}"
-            print(f"{name:20s} {side:6s} {m['overshoot_percent']:11.2f} "
-                  f"{settle} {1e3 * m['rms_error_m_s']:9.2f} "
-                  f"{1e3 * m['mean_cruise_error_m_s']:11.2f} {1e3 * m['dither_pp_m_s']:11.2f}")
-    out = ROOT / "benchmarks" / "results" / "wheel_loop.json"
-    out.write_text(json.dumps({"case": "paper Case 1 (Table 6)", "control_period_s": 0.02,
-                               "settling_band": SETTLING_BAND, "configs": CONFIGS,
-                               "results": results, "wall_time_s": elapsed}, indent=2) + "\n")
-    print(f"wrote {out} ({elapsed:.1f} s)")
+def loop_figures(req):
+    """Settling at x0.25 / x1 / x4 gain, load recovery and creep, per design (τ x1)."""
+    grid, plant = req["off_nominal_grid"], PlantParameters()
+    out = {}
+    for design in DESIGNS:
+        settings = design_settings(dict(DEFAULTS), design)
+
+        def run(name, cell):
+            return run_model_experiment(name, settings, plant, cell, req, grid)
+        creep = run("no_creep", (1.0, 1.0))
+        out[design] = {
+            "settling_s": {f"x{g:g}": _finite(run("off_nominal_settling", (g, 1.0))["value"])
+                           for g in (0.25, 1.0, 4.0)},
+            "load_recovery_s": _finite(run("load_step_recovery", (1.0, 1.0))["value"]),
+            "creep_m": creep["value"], "stop_overrun_m": creep["overrun_m"],
+            "creep_at_half_gain_m": run("no_creep", (0.5, 1.0))["value"],
+        }
+    return out
+
+
+def case1_overshoot():
+    """Overshoot [%] of the true rim speed on paper Case 1's ramp, left / right, per design."""
+    configs = {name: design_settings(dict(DEFAULTS), name) for name in DESIGNS}
+    results = compare(configs)
+    return {name: {side: results[name][side]["overshoot_percent"] for side in ("left", "right")}
+            for name in results}
+
+
+def _finite(value):
+    return value if value is not None and math.isfinite(value) else None
+
+
+def _scenario_run(name, parameters, fmu_dir, out, outputs=None):
+    from orchestrator.run import run_scenario
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(ROOT / "scenarios" / f"{name}.toml")
+    changes = {"parameters": parameters}
+    if outputs:
+        changes["outputs"] = list(dict.fromkeys(scenario.outputs + outputs))
+    result = run_scenario(scenario.with_overrides(**changes), out, progress=False,
+                          fmu_dir=fmu_dir, plots=False)
+    return result
+
+
+def _both(design):
+    return {f"controller_{side}.{key}": value for side in ("left", "right")
+            for key, value in DESIGNS[design].items()}
+
+
+def gain_spread(fmu_dir, scratch):
+    """5-95 % of the scheduled kp and kd over both wheels in paper Cases 1 and 2."""
+    import csv
+
+    gains = [f"controller_{side}.{g}" for side in ("left", "right") for g in ("kp", "kd")]
+    out = {}
+    for case in ("static_case1", "dynamic_case2"):
+        out[case] = {}
+        for design in DESIGNS:
+            result = _scenario_run(case, _both(design), fmu_dir, scratch / f"{case}_{design}",
+                                   outputs=gains)
+            with open(result.results_csv, newline="") as handle:
+                rows = list(csv.DictReader(handle))
+            spread = {}
+            for gain in ("kp", "kd"):
+                values = np.array([float(r[f"controller_{side}.{gain}"]) for r in rows
+                                   for side in ("left", "right")])
+                spread[gain] = [float(np.percentile(values, 5)), float(np.percentile(values, 95))]
+            out[case][design] = spread
+    return out
+
+
+def scenario_summaries(fmu_dir, scratch, names):
+    """Final distance to the source and path RMSE of the shipped scenarios, per FGS-PD form."""
+    out = {}
+    for name in names:
+        out[name] = {}
+        for design in ("default", "paper"):
+            summary = _scenario_run(name, _both(design), fmu_dir,
+                                    scratch / f"summary_{name}_{design}").summary
+            out[name][design] = {key: summary.get(key) for key in
+                                 ("final_distance_to_source_m", "path_rmse_m",
+                                  "final_position_error_m")}
+    return out
+
+
+def family(req, quick):
+    """What the controller family the issue names can do over the issue's whole grid.
+
+    ``linear``: on the sampled linear loop (frozen gains, feedforward), the best worst-case
+    2 % settling time over gain x0.25..x4 by tau x0.2..x2 of any PID in the searched box.
+    ``corners``: the default form's structure on the discrete-time loop with other gains:
+    which fail settling on the slow weak corner (x0.5, x2) and which limit-cycle on the fast
+    strong one (x2, x0.5).
+    """
+    from dataclasses import replace
+
+    from orchestrator.verify.analysis import filter_through, step_figures
+    from orchestrator.verify.loop_model import WheelLoopModel
+
+    base = WheelLoopModel()
+    times = np.arange(301) * base.period
+    gains = [float(g) for g in req["off_nominal_grid"]["gain_factors"]]
+    taus = [float(t) for t in req["off_nominal_grid"]["time_constant_factors"]]
+    models = {(g, t): replace(base, gain_factor=g, time_constant_factor=t)
+              for g in gains for t in taus}
+
+    def worst(kp, kd, ki):
+        value = 0.0
+        for model in models.values():
+            if np.max(np.abs(np.roots(model.characteristic_polynomial(kp, kd, ki)))) >= 1.0:
+                return math.inf
+            y = filter_through(model.closed_loop_tf(kp, kd, ki, "rim"), np.ones(times.size))
+            value = max(value, step_figures(y, times, 1.0, 0.02)[2])
+        return value
+
+    kps = (0.5, 1.0, 1.5, 2.0, 3.0) if quick else (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0)
+    kds = (0.0, 0.3) if quick else (0.0, 0.3, 1.0)
+    kis = (4, 6, 12) if quick else (2, 4, 6, 8, 12, 16, 25, 40)
+    searched = [(worst(kp, kd, ki), kp, kd, ki) for kp, kd, ki in itertools.product(kps, kds, kis)]
+    best = min(searched)
+    linear = {"searched": len(searched), "kp": list(kps), "kd": list(kds), "ki": list(kis),
+              "best_worst_settling_s": best[0], "at": {"kp": best[1], "kd": best[2],
+                                                       "ki": best[3]}}
+    plant, grid = PlantParameters(), req["off_nominal_grid"]
+    scales = (0.9, 1.2, 1.5) if quick else (0.6, 0.9, 1.05, 1.2, 1.35, 1.5, 1.7)
+    integrals = (16, 28) if quick else (8, 12, 16, 22, 28, 36)
+    rows = []
+    for scale, integral in itertools.product(scales, integrals):
+        settings = dict(DEFAULTS, gain_scale=scale, integral_gain=integral)
+        weak = run_model_experiment("off_nominal_settling", settings, plant, (0.5, 2.0), req, grid)
+        strong = run_model_experiment("no_limit_cycle", settings, plant, (2.0, 0.5), req, grid)
+        rows.append({"gain_scale": scale, "integral_gain": integral,
+                     "settling_weak_slow_s": _finite(weak["value"]),
+                     "limit_cycle_strong_fast_quanta": _finite(strong["value"]),
+                     "both_hold": weak["passed"] and strong["passed"]})
+    corners = {"designs": rows, "both_hold": sum(r["both_hold"] for r in rows)}
+    return {"linear": linear, "corners": corners}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="one scenario and a small family search (a check that it runs)")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    req = load_requirements()
+    out = {"designs": {name: DESIGNS[name] for name in DESIGNS}, "control_period_s": 0.02}
+    out["loop"] = loop_figures(req)
+    out["case1_overshoot_percent"] = case1_overshoot()
+    with tempfile.TemporaryDirectory(prefix="wheel_loop_") as scratch:
+        scratch = Path(scratch)
+        from orchestrator.builder.fmus import build_all
+
+        build_all(scratch / "fmus")
+        out["gain_spread_5_95"] = gain_spread(scratch / "fmus", scratch)
+        out["scenarios"] = scenario_summaries(scratch / "fmus", scratch,
+                                              SCENARIOS[:1] if args.quick else SCENARIOS)
+    out["family"] = family(req, args.quick)
+    out["quick"] = bool(args.quick)
+    out["wall_time_s"] = time.perf_counter() - started
+    _print(out)
+    RESULTS.write_text(json.dumps(out, indent=2) + "\n")
+    print(f"wrote {RESULTS} ({out['wall_time_s']:.1f} s)")
+
+
+def _print(out):
+    def s(value, spec=".2f"):
+        return "never" if value is None else format(value, spec)
+    print(f"{'design':8s} {'settle x0.25':>12s} {'x1':>6s} {'x4':>6s} {'load s':>7s} "
+          f"{'creep mm':>9s} {'Case 1 overshoot %':>19s}")
+    for name, f in out["loop"].items():
+        st, over = f["settling_s"], out["case1_overshoot_percent"][name]
+        print(f"{name:8s} {s(st['x0.25']):>12s} {s(st['x1']):>6s} {s(st['x4']):>6s} "
+              f"{s(f['load_recovery_s']):>7s} {1000 * f['creep_m']:9.3f} "
+              f"{s(over['left'])} / {s(over['right'])}")
+    for case, designs in out["gain_spread_5_95"].items():
+        for name, spread in designs.items():
+            print(f"{case:14s} {name:8s} kp 5-95 % {spread['kp'][0]:.2f}..{spread['kp'][1]:.2f}"
+                  f"  kd {spread['kd'][0]:.2f}..{spread['kd'][1]:.2f}")
+    for name, forms in out["scenarios"].items():
+        print(f"{name:14s} " + "  ".join(
+            f"{form}: final {f['final_distance_to_source_m']:.3f} m, RMSE "
+            f"{f['path_rmse_m']:.3f} m" for form, f in forms.items()))
+    lin, corners = out["family"]["linear"], out["family"]["corners"]
+    print(f"family: best worst-case 2 % settling over the whole grid "
+          f"{s(lin['best_worst_settling_s'])} s (of {lin['searched']} PID gain sets); "
+          f"{corners['both_hold']} of "
+          f"{len(corners['designs'])} default-form gain sets meet both corners")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ for the Routh-Hurwitz tables of :mod:`.routh`);
 the pythonfmu slave lives in :mod:`.fmu` and is not imported here.
 """
 
-from .controller import DEFAULTS, MODES, WheelSpeedController
+from .controller import DEFAULTS, FORM_PARAMETERS, FORMS, MODES, WheelSpeedController
+from .default_form import DefaultFormLaw
 from .defuzzify import discrete_centroid, exact_centroid, weighted_average
 from .derivative import FilteredDerivative
 from .fgs_pd import PAPER_TO_OURS, check_gain_range, scheduled_gain
@@ -19,7 +20,7 @@ from .routh import (
 from .rules import BIG, KD_TABLE, KP_TABLE, SMALL, rule_matrix
 
 __all__ = [
-    "DEFAULTS", "MODES", "WheelSpeedController",
+    "DEFAULTS", "FORM_PARAMETERS", "FORMS", "MODES", "WheelSpeedController", "DefaultFormLaw",
     "discrete_centroid", "exact_centroid", "weighted_average",
     "FilteredDerivative",
     "PAPER_TO_OURS", "check_gain_range", "scheduled_gain",

@@ -1,5 +1,13 @@
 """The wheel-speed controller core: FGS-PD (the paper), PID (its CPID baseline) or fixed PD.
 
+Two forms of the FGS-PD and fixed-PD laws (``form``): ``"default"``, the loop this repository
+ships (:mod:`.default_form`: motor-model feedforward of speed and acceleration, the paper's
+gain boxes on a stated scale, an integral of the speed error, reset while the reference is
+held at zero; docs/control.md says why and what it measures), and ``"paper"``, the paper's
+printed design as this repository first implemented it (below). The PID mode is the paper's
+CPID in both forms. Each form reads its own parameters (:data:`FORM_PARAMETERS`); setting
+one that the chosen form does not read is refused, never silently ignored.
+
 Sign convention: the error is ``e = v_ref - v_meas`` (positive when the wheel is too slow)
 and every gain is positive. The paper writes its error the other way round, so its negative
 ranges Kp in [-4, -3], Kd in [-2, -0.3] are kp in [3, 4], kd in [0.3, 2] here, with "max"
@@ -21,7 +29,7 @@ Output limit: ``+-v_supply``, or the measured supply of the motor driver when it
 (``supply``): a sagging battery saturates the driver below the nominal supply, and the
 anti-windup of the integral terms can only stop integrating when it knows that limit.
 
-Integral trim (the PD form chosen, docs/control.md): the fgs_pd and pd modes add
+The paper form. Integral trim (docs/control.md): the fgs_pd and pd modes add
 ``ki I`` with ``ki = trim_ki`` [1/s] and ``I`` the time integral of ``e_n`` (the PID's
 integrator and anti-windup, :class:`.PidLaw`), so the steady-state error is zero for any
 motor constant the loop is stable with. ``trim_ki = 0`` gives the pure PD of Eq. (46).
@@ -30,17 +38,22 @@ motor constant the loop is stable with. ``trim_ki = 0`` gives the pure PD of Eq.
 import math
 
 from ..common.errors import InputError, ParameterError
+from .default_form import DefaultFormLaw
 from .derivative import FilteredDerivative
 from .fgs_pd import check_gain_range, scheduled_gain
 from .inference import METHODS, FuzzyGainScheduler
 from .pid import PidLaw
 
-__all__ = ["WheelSpeedController", "MODES", "DEFAULTS"]
+__all__ = ["WheelSpeedController", "MODES", "FORMS", "DEFAULTS", "FORM_PARAMETERS"]
 
 MODES = ("fgs_pd", "pid", "pd")
+FORMS = ("default", "paper")
 
 # 14 * (Ke + R b / Kt) / r for the plant's defaults (docs/plant.md): 4.44 V per m/s.
 _VOLTS_PER_SPEED = 14.0 * (0.01808 + 2.4 * 7.17e-6 / 0.01808) / 0.06
+# M_eff R / (R B + K_f K_e) for the plant's defaults (docs/verification.md): the wheel's
+# mechanical time constant, 0.390 s; g times it is the voltage per m/s^2 of acceleration.
+_MECHANICAL_TIME_CONSTANT = 0.39
 
 DEFAULTS = {
     "mode": "fgs_pd",
@@ -54,6 +67,24 @@ DEFAULTS = {
     "feedforward": True,
     "fuzzy_method": "weighted",
     "trim_ki": 0.5,
+    "form": "default",
+    "gain_scale": 1.2,
+    "integral_gain": 22.0,
+    "derivative_time": 0.01,
+    # One encoder count per speed window, 2 pi r / ppr / speed_window = 25.9 mm/s, and the
+    # filtered derivative a one-count step gives, 25.9 mm/s / (tau + T) = 0.432 m/s^2: the
+    # smallest error the loop can see is the edge of the default form's fuzzy universe.
+    "fuzzy_e_range": 0.0259,
+    "fuzzy_de_range": 0.432,
+    "acceleration_feedforward": _MECHANICAL_TIME_CONSTANT,
+    "zero_reference_reset": True,
+}
+
+# The parameters only one form reads; every other parameter means the same in both.
+FORM_PARAMETERS = {
+    "paper": ("trim_ki",),
+    "default": ("gain_scale", "integral_gain", "derivative_time", "fuzzy_e_range",
+                "fuzzy_de_range", "acceleration_feedforward", "zero_reference_reset"),
 }
 
 
@@ -84,8 +115,23 @@ class WheelSpeedController:
     fuzzy_method : {"weighted", "mamdani"}
         Defuzzification of the FGS-PD fuzzy system (see :class:`.FuzzyGainScheduler`).
     trim_ki : float
-        Integral trim of the fgs_pd and pd modes [1/s] on the time integral of ``e_n``;
-        0 switches it off (a pure PD, steady-state error unless the feedforward is exact).
+        Paper form: integral trim of the fgs_pd and pd modes [1/s] on the time integral of
+        ``e_n``; 0 switches it off (a pure PD, steady-state error unless the feedforward is
+        exact).
+    form : {"default", "paper"}
+        The FGS-PD / PD design (module docstring); the PID is the CPID in both.
+    gain_scale, integral_gain, derivative_time, fuzzy_e_range, fuzzy_de_range, \
+acceleration_feedforward, zero_reference_reset
+        Default form (:class:`.DefaultFormLaw`): factor on the PD [1], integral gain on
+        ``e`` [1/s], derivative time per unit kd [s], the fuzzy universe's edges [m/s,
+        m/s^2], the inertia feedforward's time [s] (0: off), and whether the integral is
+        emptied while ``v_ref`` is 0.
+
+    Raises
+    ------
+    ParameterError
+        Naming every invalid parameter, including a parameter set to other than its
+        default that the chosen form does not read (:data:`FORM_PARAMETERS`).
 
     Attributes
     ----------
@@ -105,11 +151,16 @@ class WheelSpeedController:
         if p["fuzzy_method"] not in METHODS:
             problems.append(f"fuzzy_method = {p['fuzzy_method']!r} is not one of "
                             f"{', '.join(METHODS)}")
-        for name in ("e_range", "de_range", "v_supply", "volts_per_speed"):
+        if p["form"] not in FORMS:
+            problems.append(f"form = {p['form']!r} is not one of {', '.join(FORMS)}")
+        else:
+            problems += _unread_by_form(p)
+        for name in ("e_range", "de_range", "v_supply", "volts_per_speed", "gain_scale",
+                     "fuzzy_e_range", "fuzzy_de_range"):
             if not (math.isfinite(p[name]) and p[name] > 0.0):
                 problems.append(f"{name} = {p[name]!r} must be a positive finite number")
         for name in ("pid_kp", "pid_ki", "pid_kd", "pd_kp", "pd_kd", "derivative_time_constant",
-                     "trim_ki"):
+                     "trim_ki", "integral_gain", "derivative_time", "acceleration_feedforward"):
             if not (math.isfinite(p[name]) and p[name] >= 0.0):
                 problems.append(f"{name} = {p[name]!r} must be finite and >= 0")
         for name in ("kp", "kd"):
@@ -129,8 +180,20 @@ class WheelSpeedController:
         self.volts_per_speed = float(p["volts_per_speed"])
         self.feedforward = bool(p["feedforward"])
         self.to_voltage = self.volts_per_speed * self.e_range
-        self.scheduler = FuzzyGainScheduler(self.e_range, self.de_range,
-                                            method=p["fuzzy_method"])
+        self.form = p["form"]
+        # The PID is the CPID in both forms; the default form changes the FGS-PD and PD.
+        self.default_law = None
+        if self.form == "default" and self.mode != "pid":
+            self.scheduler = FuzzyGainScheduler(float(p["fuzzy_e_range"]),
+                                                float(p["fuzzy_de_range"]),
+                                                method=p["fuzzy_method"])
+            self.default_law = DefaultFormLaw(
+                self.volts_per_speed, p["gain_scale"], p["derivative_time"],
+                p["integral_gain"], p["acceleration_feedforward"], self.feedforward,
+                p["zero_reference_reset"], self.v_supply)
+        else:
+            self.scheduler = FuzzyGainScheduler(self.e_range, self.de_range,
+                                                method=p["fuzzy_method"])
         self.derivative = FilteredDerivative(float(p["derivative_time_constant"]))
         self.pid = PidLaw(p["pid_kp"], p["pid_ki"], p["pid_kd"],
                           integral_limit=self.v_supply / self.to_voltage)
@@ -192,8 +255,21 @@ class WheelSpeedController:
                                  "a finite voltage >= 0")
             if supply < limit:
                 limit = supply
-        error = v_ref - v_meas
+        law = self.default_law
+        error = (v_ref if law is None else law.tracked_reference(v_ref)) - v_meas
         rate = self.derivative.update(error, h)
+        if law is not None:
+            if self.mode == "fgs_pd":
+                scheduler = self.scheduler
+                kp_n, kd_n = scheduler.evaluate_normalised(error / scheduler.e_range,
+                                                           rate / scheduler.de_range)
+                self.kp = (self.kp_max - self.kp_min) * kp_n + self.kp_min
+                self.kd = (self.kd_max - self.kd_min) * kd_n + self.kd_min
+            voltage = law.output(v_ref, error, rate, self.kp, self.kd, h, limit)
+            self.error = error
+            self.error_rate = rate
+            self.voltage = voltage
+            return voltage
         e_n = error / self.e_range
         de_n = rate / self.de_range
         offset = self.volts_per_speed * v_ref if self.feedforward else 0.0
@@ -221,7 +297,18 @@ class WheelSpeedController:
         self.derivative.reset()
         self.pid.reset()
         self.trim.reset()
+        if self.default_law is not None:
+            self.default_law.reset()
         self.error = 0.0
         self.error_rate = 0.0
         self.kp, self.kd = self._initial_gains()
         self.voltage = 0.0
+
+
+def _unread_by_form(parameters):
+    """Problems: parameters set to other than their default that ``form`` does not read."""
+    form = parameters["form"]
+    return [f"{name} = {parameters[name]!r} is read only by form = {other!r}, not by form = "
+            f"{form!r} (leave it at {DEFAULTS[name]!r} or choose form = {other!r})"
+            for other, names in FORM_PARAMETERS.items() if other != form
+            for name in names if parameters[name] != DEFAULTS[name]]

@@ -9,12 +9,16 @@ __all__ = ["WheelController"]
 class WheelController(SonotrackSlave):
     """Speed controller of one wheel: FGS-PD (the paper), PID (its CPID baseline) or fixed PD.
 
-    voltage = clip(volts_per_speed * (v_ref [feedforward] + e_range * (kp e/e_range +
-    kd de/de_range [+ ki integral])), +-v_supply), with e = v_ref - v_meas.
+    With e = v_ref - v_meas and g = volts_per_speed, in the default form (``form``)
+    voltage = clip(g (v_ref + acceleration_feedforward dv_ref/dt) [feedforward] +
+    g gain_scale (kp e + kd derivative_time de) + g integral_gain integral(e), +-v_supply),
+    the integral emptied while v_ref = 0; in the paper form
+    voltage = clip(g (v_ref [feedforward] + e_range (kp e/e_range + kd de/de_range +
+    trim_ki integral(e/e_range))), +-v_supply). The PID mode is the paper's CPID.
     """
 
     description = ("Wheel-speed controller: fuzzy gain-scheduled PD (Zhao-Tomizuka-Isaka rules), "
-                   "PID baseline or fixed PD, with motor-model feedforward")
+                   "PID baseline or fixed PD, with motor-model feedforward; default or paper form")
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=10.0, step_size=0.02)
     valid_ranges = load_ranges("control")
 

@@ -45,7 +45,7 @@ class FuzzyGainScheduler:
     universe_points : int
         Samples of the output universe for ``centroid="discrete"``.
     kp_table, kd_table : sequence of str
-        Rule tables (rows e = NB..PB, columns de = NB..PB); default DESIGN.md's.
+        Rule tables (rows e = NB..PB, columns de = NB..PB); default those of :mod:`components.control.rules`.
 
     Raises
     ------

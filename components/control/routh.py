@@ -1,6 +1,6 @@
 """Routh-Hurwitz stability test, its discrete-time form through the bilinear map, gain bounds.
 
-Our own implementation (DESIGN.md asks for one, checked against numeric roots), so that the
+Our own implementation (the project asks for one, checked against numeric roots), so that the
 verification report can state *why* a gain is stable from the characteristic polynomial alone
 rather than from a root finder. Coefficients are given highest power first, as for
 :func:`numpy.roots` and :func:`numpy.polyval`.

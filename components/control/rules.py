@@ -1,7 +1,7 @@
 """The 7x7 rule tables for the normalised gains Kp' and Kd'.
 
 The paper's Tables 4 and 5 are garbled in print (shifted columns); these are the tables of
-Zhao, Tomizuka and Isaka (IEEE SMC 1993) given in DESIGN.md. Rows are e = NB..PB, columns
+Zhao, Tomizuka and Isaka (IEEE SMC 1993) (docs/errata.md). Rows are e = NB..PB, columns
 de = NB..PB; ``B`` is the output set Big, ``S`` Small.
 """
 

@@ -4,9 +4,14 @@ Modules: :mod:`.loop_model` (the sampled loop), :mod:`.analysis` (poles, margins
 Routh), :mod:`.robustness` (other plants, the largest stable plant-gain factor),
 :mod:`.case1` (the paper's Case 1 on the nonlinear plant core), :mod:`.measure` (the figures
 of a run), :mod:`.fmu_runs` (the built FMUs against the models), :mod:`.checks`
-(requirements and verdicts) and :mod:`.robust_checks` (those on other plants),
-:mod:`.figures`, :mod:`.document` (the report as one document, rendered to Markdown and
-HTML by :mod:`orchestrator.report`), :mod:`.report` (:func:`verify`) and :mod:`.cli`.
+(requirements and verdicts) and :mod:`.robust_checks` (those on other plants);
+the off-nominal requirements: :mod:`.designs` (the three designs judged and their loop
+gains), :mod:`.sampled_wheel` (the discrete-time loop with the real controller),
+:mod:`.wheel_experiments` (references, wheels, metrics), :mod:`.requirement_runs` (on the
+loop), :mod:`.fmu_requirements` (through the FMUs in our master), :mod:`.requirement_checks`
+(verdicts, ranges); :mod:`.figures`, :mod:`.document` and :mod:`.requirements_document` (the
+report as one document, rendered to Markdown and HTML by :mod:`orchestrator.report`),
+:mod:`.report` (:func:`verify`) and :mod:`.cli`.
 """
 
 from .analysis import (
@@ -19,7 +24,12 @@ from .fmu_runs import (
     closed_loop_fmu_comparison, compliance_bound, controller_fmu_comparison, fmu_step_comparison,
 )
 from .loop_model import LinearWheelModel, WheelLoopModel, linear_wheel_model
-from .report import DEFAULT_OUT_DIR, VerificationReport, verify
+from .designs import DESIGNS, design_settings, loop_gains
+from .fmu_requirements import fmu_requirements
+from .report import DEFAULT_OUT_DIR, VerificationReport, off_nominal, verify
+from .requirement_checks import design_lines, largest_ranges, requirement_checks
+from .requirement_runs import measure_requirements
+from .sampled_wheel import SampledWheel, run_loop
 from .robustness import (
     PlantVariant, largest_stable_gain_factor, plant_gain_edges, robustness_point,
     steady_state_error,
@@ -31,7 +41,9 @@ __all__ = [
     "Check", "exit_status", "load_requirements", "register_cli",
     "closed_loop_fmu_comparison", "compliance_bound", "controller_fmu_comparison",
     "fmu_step_comparison", "LinearWheelModel", "WheelLoopModel", "linear_wheel_model",
-    "DEFAULT_OUT_DIR", "VerificationReport", "verify",
+    "DEFAULT_OUT_DIR", "VerificationReport", "verify", "off_nominal",
+    "DESIGNS", "design_settings", "loop_gains", "fmu_requirements", "design_lines",
+    "largest_ranges", "requirement_checks", "measure_requirements", "SampledWheel", "run_loop",
     "PlantVariant", "robustness_point", "steady_state_error", "largest_stable_gain_factor",
     "plant_gain_edges",
 ]

@@ -15,7 +15,7 @@ from .loop_model import zoh_with_average
 
 __all__ = ["GainAnalysis", "analyse_gains", "stability_boundary", "continuous_gain_bound",
            "controller_cross_check", "kp_edge", "routh_bounds", "spectral_radii",
-           "incremental_form", "final_value", "step_figures",
+           "incremental_form", "final_value", "filter_through", "step_figures",
            "KP_SEARCH_MAX"]
 
 # Beyond this kp the search for the stability edge stops. With the defaults the edge is near
@@ -150,6 +150,20 @@ def step_figures(response, times, final, threshold=0.05):
     return float(overshoot), float(rise), settle
 
 
+def filter_through(tf, inputs):
+    """A discrete TF's response to the input sequence ``inputs`` (one value per sample).
+
+    ``scipy.signal.lfilter`` reads both coefficient lists as powers of ``z^-1`` from
+    ``z^0``, so the numerator is first padded to the denominator's length: unpadded, a TF of
+    relative degree d would come out d samples early.
+    """
+    from scipy.signal import lfilter
+
+    num, den = np.asarray(tf.num[0][0], dtype=float), np.asarray(tf.den[0][0], dtype=float)
+    num = np.concatenate([np.zeros(den.size - num.size), num])
+    return lfilter(num, den, np.asarray(inputs, dtype=float))
+
+
 def final_value(tf):
     """``T(1)``: the final value of a stable discrete TF's unit step (final value theorem)."""
     num, den = np.asarray(tf.num[0][0]), np.asarray(tf.den[0][0])
@@ -238,12 +252,14 @@ def continuous_gain_bound(model, kd, kp_max=1.0e4):
 
 
 def controller_cross_check(model, kp, kd, ki=0.0, step=0.05, samples=40, mode="pd",
-                           controller_overrides=None):
+                           controller_overrides=None, controller=None):
     """Run the real :class:`WheelSpeedController` on the sampled linear plant; compare to the TF.
 
     The controller's derivative starts at zero on its first sample (no kick), so the loop
     runs one sample at zero reference before the step, as it does after any start-up.
-    ``mode="pd"`` runs the fixed PD with ``ki`` as its integral trim, ``"pid"`` the PID;
+    ``mode="pd"`` runs the paper form's fixed PD with ``ki`` as its integral trim, ``"pid"``
+    the PID; ``controller`` gives the controller's parameters instead (any form, whose
+    gains ``kp``, ``kd``, ``ki`` on the model are then the caller's mapping of them);
     ``controller_overrides`` change the controller only (a deliberately different one).
 
     Returns
@@ -258,10 +274,10 @@ def controller_cross_check(model, kp, kd, ki=0.0, step=0.05, samples=40, mode="p
 
     parameters = dict(
         mode=mode, pd_kp=kp, pd_kd=kd, pid_kp=kp, pid_ki=ki, pid_kd=kd, trim_ki=ki,
-        e_range=model.e_range, de_range=model.de_range,
+        form="paper", e_range=model.e_range, de_range=model.de_range,
         derivative_time_constant=model.derivative_time_constant,
         volts_per_speed=model.volts_per_speed, feedforward=model.feedforward,
-        v_supply=1e9)  # linear comparison: no clipping
+        v_supply=1e9) if controller is None else dict(controller)  # linear: no clipping
     parameters.update(controller_overrides or {})
     controller = WheelSpeedController(**parameters)
     ad, bd, c = model.discrete

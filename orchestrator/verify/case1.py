@@ -27,10 +27,12 @@ __all__ = ["CASE1", "CONFIGS", "SETTLING_BAND", "trapezoid", "run_case1", "wheel
 
 CASE1 = {"left": (0.342, 0.342, 2.528), "right": (0.258, 0.258, 1.9)}  # v, a, distance
 CONFIGS = {
-    "fgs_pd": {"mode": "fgs_pd"},
+    "fgs_pd": {"mode": "fgs_pd"},                                      # the default form
     "fgs_pd_mamdani": {"mode": "fgs_pd", "fuzzy_method": "mamdani"},
-    "fgs_pd_pure": {"mode": "fgs_pd", "trim_ki": 0.0},
     "pd": {"mode": "pd"},
+    "fgs_pd_paper": {"mode": "fgs_pd", "form": "paper"},
+    "fgs_pd_paper_mamdani": {"mode": "fgs_pd", "form": "paper", "fuzzy_method": "mamdani"},
+    "fgs_pd_pure": {"mode": "fgs_pd", "form": "paper", "trim_ki": 0.0},  # Eq. (46) alone
     "pid": {"mode": "pid"},
     "pid_no_feedforward": {"mode": "pid", "feedforward": False},
 }

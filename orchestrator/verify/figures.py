@@ -8,7 +8,14 @@ import numpy as np
 
 from orchestrator.report.matplotlib_agg import pyplot
 
+from .designs import loop_gains, loop_model
+
 __all__ = ["write_figures"]
+
+
+def _poly(model, s, kp, kd):
+    """Characteristic polynomial of the form of ``s`` at (kp, kd) in the form's units."""
+    return model.characteristic_polynomial(*loop_gains(s, kp, kd))
 
 
 def _save(plt, fig, path):
@@ -23,14 +30,16 @@ def _stability_region(plt, model, f, path):
 
     from .analysis import kp_edge, spectral_radii
 
-    surface, reach = f["surface"], f["reachable"]
+    surface, reach, s = f["surface"], f["reachable"], f["settings"]
     ki = surface["ki"]
     edge_max = max((b["kp_routh"] or 0.0) for b in surface["boundaries"])
     kp_axis = np.linspace(0.0, 1.3 * max(edge_max, surface["kps"][-1]), 70)
     kd_axis = np.linspace(0.0, max(6.0, 2.5 * surface["kds"][-1]), 50)
-    radius = spectral_radii([model.characteristic_polynomial(kp, kd, ki)
+    radius = spectral_radii([_poly(model, s, kp, kd)
                              for kd in kd_axis for kp in kp_axis]).reshape(kd_axis.size, -1)
-    edge = np.array([kp_edge(model, kd, ki) for kd in kd_axis[::2]])
+    unit_kp = loop_gains(s, 1.0, 0.0)[0]
+    edge = np.array([kp_edge(model, loop_gains(s, 1.0, kd)[1], ki) / unit_kp
+                     for kd in kd_axis[::2]])
     box = f["paper_box"]["box"]
     points = np.array([[p["kp"], p["kd"]] for p in reach["points"]])
     norm = TwoSlopeNorm(vmin=0.9, vcenter=1.0, vmax=1.3)
@@ -50,7 +59,7 @@ def _stability_region(plt, model, f, path):
             ax.set_title("zoom on the paper's box (the edge is far to the right)", fontsize=9)
         else:
             ax.set_xlim(kp_axis[0], kp_axis[-1])
-            ax.set_title(f"Sampled loop, integral trim ki = {ki:g} 1/s: stable left of the "
+            ax.set_title(f"Sampled loop, integral ki = {ki:g} 1/s: stable left of the "
                          "black edge", fontsize=9)
         fig.colorbar(mesh, ax=ax, label="largest closed-loop |z| (clipped to 0.9..1.3)")
     axes[0].plot([], [], color="k", lw=2, label="stability edge |z| = 1 (roots)")
@@ -69,7 +78,8 @@ def _bode(plt, model, f, path):
     fig, (mag_ax, phase_ax) = plt.subplots(2, 1, figsize=(7.5, 6), sharex=True)
     for kp in (s["kp_min"], s["kp_max"]):
         for kd in (s["kd_min"], s["kd_max"]):
-            response = control.frequency_response(model.loop_tf(kp, kd, ki), omega)
+            response = control.frequency_response(model.loop_tf(*loop_gains(s, kp, kd)),
+                                                  omega)
             magnitude = np.squeeze(response.magnitude)
             phase = np.degrees(np.unwrap(np.squeeze(response.phase)))
             label = f"kp {kp:g}, kd {kd:g}"
@@ -81,7 +91,7 @@ def _bode(plt, model, f, path):
     phase_ax.set_ylabel("phase of C H [deg]")
     phase_ax.set_xlabel("frequency [rad/s] (up to Nyquist)")
     mag_ax.set_title(f"Open loop C(z) H(z) at the surface's corners (T = "
-                     f"{1000 * model.period:.0f} ms, trim ki = {ki:g} 1/s)", fontsize=9)
+                     f"{1000 * model.period:.0f} ms, integral ki = {ki:g} 1/s)", fontsize=9)
     mag_ax.legend(fontsize=8)
     for ax in (mag_ax, phase_ax):
         ax.grid(alpha=0.3, which="both")
@@ -91,14 +101,17 @@ def _bode(plt, model, f, path):
 def _steps(plt, model, f, path):
     import control
 
-    s, ki = f["settings"], f["surface"]["ki"]
+    s = f["settings"]
     times = np.arange(int(round(1.5 / model.period)) + 1) * model.period
     fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    form = loop_model(model, s)
     for kp in (s["kp_min"], s["kp_max"]):
         for kd in (s["kd_min"], s["kd_max"]):
-            y = control.step_response(model.closed_loop_tf(kp, kd, ki), times).outputs
+            y = control.step_response(form.closed_loop_tf(*loop_gains(s, kp, kd)),
+                                      times).outputs
             ax.step(times, y, where="post", label=f"FGS-PD frozen kp {kp:g}, kd {kd:g}")
-    y = control.step_response(model.closed_loop_tf(s["pid_kp"], s["pid_kd"], s["pid_ki"]),
+    pid = loop_model(model, dict(s, mode="pid"))
+    y = control.step_response(pid.closed_loop_tf(s["pid_kp"], s["pid_kd"], s["pid_ki"]),
                               times).outputs
     ax.step(times, y, where="post", ls="--",
             label=f"PID {s['pid_kp']:g} / {s['pid_ki']:g} 1/s / {s['pid_kd']:g}")
@@ -122,17 +135,17 @@ def _unit_circle(ax):
 
 
 def _root_locus(plt, model, f, path):
-    s, ki = f["settings"], f["surface"]["ki"]
+    s = f["settings"]
     edge = max((b["kp_routh"] or 0.0) for b in f["surface"]["boundaries"])
     kps = np.linspace(0.0, 1.3 * max(edge, s["kp_max"]), 160)
     fig, axes = plt.subplots(1, 2, figsize=(11, 5))
     for ax, kd in zip(axes, (s["kd_min"], s["kd_max"])):
         _unit_circle(ax)
-        poles = np.array([np.roots(model.characteristic_polynomial(kp, kd, ki)) for kp in kps])
+        poles = np.array([np.roots(_poly(model, s, kp, kd)) for kp in kps])
         colours = np.repeat(kps, poles.shape[1])
         scatter = ax.scatter(poles.real.ravel(), poles.imag.ravel(), c=colours, s=5,
                              cmap="plasma")
-        box = np.array([np.roots(model.characteristic_polynomial(kp, kd, ki))
+        box = np.array([np.roots(_poly(model, s, kp, kd))
                         for kp in (s["kp_min"], s["kp_max"])]).ravel()
         ax.plot(box.real, box.imag, "kx", ms=7, label=f"kp = {s['kp_min']:g} and {s['kp_max']:g}")
         ax.set_title(f"Root locus over kp 0..{kps[-1]:.0f}, kd = {kd:g}", fontsize=9)
@@ -190,8 +203,10 @@ def _closed_loop_fmus(plt, f, path):
                 label="FMUs, rim_speed_left")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("rim speed [m/s]")
+    shape = ("step" if loop.get("ramp_m_s2") is None
+             else f"ramp at {loop['ramp_m_s2']:g} m/s^2")
     ax.set_title(f"RobotPlant + WheelController FMUs in our master vs closed-loop TF "
-                 f"({loop['step_m_s']:g} m/s step)", fontsize=9)
+                 f"({loop['step_m_s']:g} m/s, {shape})", fontsize=9)
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
     return _save(plt, fig, path)
@@ -199,9 +214,9 @@ def _closed_loop_fmus(plt, f, path):
 
 def _robustness(plt, f, path):
     r = f["robustness"]
-    panels = [(f"{name} (trim ki {r['trim_ki']:g} 1/s)" if name != "pid" else "pid", points)
+    panels = [(f"{name} (integral ki {r['trim_ki']:g} 1/s)" if name != "pid" else "pid", points)
               for name, points in r["points"].items()]
-    panels.append(("fgs_pd, pure PD (trim off)", f["robustness_pure_pd"]))
+    panels.append(("fgs_pd, the paper's pure PD", f["robustness_pure_pd"]))
     gains, taus = r["gain_factors"], r["time_constant_factors"]
     fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels) + 1.5, 3.9),
                              layout="constrained")

@@ -10,17 +10,32 @@
 import math
 import tempfile
 from dataclasses import fields
+from pathlib import Path
 
 import numpy as np
 
 from components.common.errors import ConfigError, SimulationError
 from components.plant.parameters import PlantParameters
 
+from .designs import is_default_form, loop_gains, loop_model
 from .loop_model import linear_wheel_model
 
 __all__ = ["fmu_step_comparison", "fmu_variants", "compliance_bound",
            "controller_fmu_comparison", "controller_law_reference",
-           "closed_loop_fmu_comparison"]
+           "closed_loop_fmu_comparison", "built_fmu"]
+
+
+def built_fmu(name, folder):
+    """``folder / <name>.fmu``, built there first unless it is there already.
+
+    :func:`.report.verify` builds each FMU once, before any is loaded, and hands the folder
+    to every comparison: building again in a process that has loaded an FMU of the same
+    model fails (pythonfmu finds the loaded model's module under the model's name).
+    """
+    from orchestrator.builder.fmus import build_fmu
+
+    path = Path(folder) / f"{name}.fmu"
+    return path if path.is_file() else build_fmu(name, folder)
 
 
 def compliance_bound(parameters, voltage):
@@ -51,7 +66,8 @@ def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, f
     duration, step : float, optional
         Length and communication step [s].
     fmu_dir : path-like, optional
-        Folder to build into (default: a temporary folder).
+        Folder holding the built FMUs, or to build them into (:func:`built_fmu`; default: a
+        temporary folder).
     variants : sequence of (str, dict), optional
         Runs as ``(label, parameter overrides)``; default one run, ``("defaults", {})``.
         The transfer function is always that of ``parameters`` (the overrides used by
@@ -69,7 +85,6 @@ def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, f
     """
     import control
 
-    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
 
     p = parameters or PlantParameters()
@@ -78,7 +93,7 @@ def fmu_step_comparison(parameters=None, voltage=2.0, duration=2.0, step=0.02, f
     times = np.arange(steps + 1) * step
     tf_rim = voltage * control.step_response(model.transfer_function(), times).outputs
     with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
-        path = build_fmu("RobotPlant", fmu_dir or scratch)
+        path = built_fmu("RobotPlant", fmu_dir or scratch)
         runs = []
         for label, overrides in (variants or [("defaults", {})]):
             instance = FmuInstance(path, f"verify_plant_{len(runs)}")
@@ -163,7 +178,7 @@ def controller_law_reference(settings, inputs, h):
     Independent of :class:`components.control.WheelSpeedController` except for the fuzzy
     scheduler's normalised gains (the scheduler is checked against scikit-fuzzy in the unit
     tests): its own backward-Euler derivative, integrator with conditional integration and
-    clamp, feedforward and clipping.
+    clamp, feedforward, the default form's reference model and reset, and clipping.
 
     Parameters
     ----------
@@ -176,23 +191,31 @@ def controller_law_reference(settings, inputs, h):
     Returns
     -------
     list of (voltage, kp, kd, e_n, de_n)
+        ``e_n``, ``de_n``: the scheduler's inputs (outside [-1, 1]: outside its universe).
     """
     from components.control.inference import FuzzyGainScheduler
 
     s = settings
-    g, e_range, de_range, limit = (s["volts_per_speed"], s["e_range"], s["de_range"],
-                                   s["v_supply"])
+    default = s.get("form", "default") == "default" and s["mode"] != "pid"
+    g, limit = s["volts_per_speed"], s["v_supply"]
     tau = s["derivative_time_constant"]
-    scheduler = FuzzyGainScheduler(e_range, de_range, method=s["fuzzy_method"])
-    ki = s["pid_ki"] if s["mode"] == "pid" else s["trim_ki"]
-    integral_limit = limit / (g * e_range)
+    e_scale, de_scale = ((s["fuzzy_e_range"], s["fuzzy_de_range"]) if default
+                         else (s["e_range"], s["de_range"]))
+    scheduler = FuzzyGainScheduler(e_scale, de_scale, method=s["fuzzy_method"])
+    ki = (s["pid_ki"] if s["mode"] == "pid"
+          else s["integral_gain"] if default else s["trim_ki"])
+    # the integral term's voltage per unit of the integral, and its clamp
+    per_integral = g * ki if default else g * s["e_range"] * ki
     integral, rate, previous = 0.0, 0.0, None
+    model_speed, model_window = 0.0, 0.0
+    tau_a = s["acceleration_feedforward"] if default and s["feedforward"] else 0.0
     out = []
     for v_ref, v_meas in inputs:
-        error = v_ref - v_meas
+        tracked = model_window if tau_a else v_ref
+        error = tracked - v_meas
         rate = 0.0 if previous is None else (tau * rate + error - previous) / (tau + h)
         previous = error
-        e_n, de_n = error / e_range, rate / de_range
+        e_n, de_n = error / e_scale, rate / de_scale
         if s["mode"] == "fgs_pd":
             kp_n, kd_n = scheduler.evaluate_normalised(e_n, de_n)
             kp = s["kp_min"] + (s["kp_max"] - s["kp_min"]) * kp_n
@@ -201,26 +224,49 @@ def controller_law_reference(settings, inputs, h):
             kp, kd = s["pd_kp"], s["pd_kd"]
         else:
             kp, kd = s["pid_kp"], s["pid_kd"]
-        offset = g * v_ref if s["feedforward"] else 0.0
-        if ki > 0.0:
-            candidate = min(max(integral + e_n * h, -integral_limit / ki), integral_limit / ki)
-            raw = offset + g * e_range * (kp * e_n + ki * candidate + kd * de_n)
-            if not ((raw > limit and e_n > 0.0) or (raw < -limit and e_n < 0.0)):
+        if default:
+            offset = g * v_ref if s["feedforward"] else 0.0
+            if tau_a:
+                a = math.exp(-h / tau_a)
+                drive = min(max(v_ref + a / (1 - a) * (v_ref - model_speed), -limit / g),
+                            limit / g)
+                c = tau_a * (1 - a) / h
+                model_window = c * model_speed + (1 - c) * drive
+                model_speed = a * model_speed + (1 - a) * drive
+                offset = g * drive
+            proportional = g * s["gain_scale"] * (kp * error + kd * s["derivative_time"] * rate)
+            increment = error * h
+        else:
+            offset = g * v_ref if s["feedforward"] else 0.0
+            proportional = g * s["e_range"] * (kp * e_n + kd * de_n)
+            increment = e_n * h
+        if default and s["zero_reference_reset"] and v_ref == 0.0:
+            integral = 0.0
+        elif ki > 0.0:
+            bound = s["v_supply"] / per_integral
+            candidate = min(max(integral + increment, -bound), bound)
+            raw = offset + proportional + per_integral * candidate
+            if not ((raw > limit and error > 0.0) or (raw < -limit and error < 0.0)):
                 integral = candidate
-        raw = offset + g * e_range * (kp * e_n + ki * integral + kd * de_n)
+        raw = offset + proportional + per_integral * integral
         out.append((min(max(raw, -limit), limit), kp, kd, e_n, de_n))
     return out
 
 
 def _controller_inputs(settings, samples, seed):
-    """Random (v_ref, v_meas): half the steps small moves (inside the universe), half jumps."""
+    """Random (v_ref, v_meas): half the steps small moves (inside the universe), half jumps;
+    the reference held over blocks of five samples (so the default form's reference model
+    settles on it), every fourth block at exactly 0."""
     rng = np.random.default_rng(seed)
-    e_range = settings["e_range"]
-    inputs, error = [], 0.0
+    default = settings.get("form", "default") == "default" and settings["mode"] != "pid"
+    e_range = settings["fuzzy_e_range"] if default else settings["e_range"]
+    inputs, error, v_ref = [], 0.0, 0.0
     for k in range(samples):
-        v_ref = float(rng.uniform(-0.4, 0.4))
+        if k % 5 == 0:
+            v_ref = 0.0 if (k // 5) % 4 == 3 else float(rng.uniform(-0.4, 0.4))
         if (k // 10) % 2 == 0:
-            error = float(np.clip(error + rng.normal(0.0, 0.01), -0.8 * e_range, 0.8 * e_range))
+            error = float(np.clip(error + rng.normal(0.0, 0.025 * e_range), -0.8 * e_range,
+                                  0.8 * e_range))
         else:
             error = float(rng.uniform(-2.5 * e_range, 2.5 * e_range))
         inputs.append((v_ref, v_ref - error))
@@ -250,13 +296,12 @@ def controller_fmu_comparison(settings, modes=("fgs_pd", "pd", "pid"), samples=6
         Per mode: largest |voltage difference| [V], largest kp/kd difference, and how many
         samples had ``|e_n| > 1`` or ``|de_n| > 1`` (outside the fuzzy universe).
     """
-    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
 
     inputs = _controller_inputs(settings, samples, seed)
     runs = {}
     with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
-        path = build_fmu("WheelController", fmu_dir or scratch)
+        path = built_fmu("WheelController", fmu_dir or scratch)
         for mode in modes:
             law = dict(settings, mode=mode)
             reference = controller_law_reference(law, inputs, h)
@@ -292,11 +337,13 @@ def controller_fmu_comparison(settings, modes=("fgs_pd", "pd", "pid"), samples=6
 
 # ----- the closed loop through both FMUs ------------------------------------------------------
 def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=1.5,
-                               encoder_ppr=1_000_000, fmu_dir=None, fmu_overrides=None):
+                               encoder_ppr=1_000_000, fmu_dir=None, fmu_overrides=None,
+                               ramp=None):
     """RobotPlant + two WheelControllers (fixed-PD or PID mode) in our master vs the TF.
 
     The master (Gauss-Seidel, controllers first, base step = the loop's period) runs one step
-    at zero reference, then a reference step of ``step`` on both wheels. The plant's encoder
+    at zero reference, then a reference step of ``step`` on both wheels (or, with ``ramp``,
+    a ramp at ``ramp`` m/s^2 up to ``step``: what the planner gives). The plant's encoder
     resolution is raised to ``encoder_ppr`` (the linear model has no quantisation); every
     other parameter is RobotPlant's default, as in the model.
 
@@ -307,7 +354,8 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
     settings : dict
         Controller parameters.
     gain_points : sequence of (mode, kp, kd, ki)
-        ``mode`` "pd" (``ki`` is the trim) or "pid".
+        ``mode`` "pd" (kp, kd in the form's units, ``ki`` its integral: ``trim_ki`` in the
+        paper form, ``integral_gain`` in the default form) or "pid".
     fmu_overrides : dict, optional
         Controller parameters given to the FMUs only (tests).
 
@@ -317,11 +365,10 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
         Per gain point: largest |rim - step * TF| over both wheels [m/s] and as a fraction
         of the step, the traces (times, TF, left rim).
     """
-    import control
-
-    from orchestrator.builder.fmus import build_fmu
     from orchestrator.fmu.handle import FmuInstance
     from orchestrator.run.master import InstanceSpec, Link, Master
+
+    from .analysis import filter_through
 
     T = model.period
     steps = int(round(duration / T))
@@ -331,11 +378,16 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
     results = []
     with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
         folder = fmu_dir or scratch
-        plant_path = build_fmu("RobotPlant", folder)
-        controller_path = build_fmu("WheelController", folder)
+        plant_path = built_fmu("RobotPlant", folder)
+        controller_path = built_fmu("WheelController", folder)
         for index, (mode, kp, kd, ki) in enumerate(gain_points):
-            law = dict(settings, mode=mode, pd_kp=kp, pd_kd=kd, trim_ki=ki, pid_kp=kp,
-                       pid_kd=kd, pid_ki=ki)
+            if mode == "pid":
+                law = dict(settings, mode="pid", pid_kp=kp, pid_kd=kd, pid_ki=ki)
+                loop, tf_gains = loop_model(model, law), (kp, kd, ki)
+            else:
+                integral = "integral_gain" if is_default_form(settings) else "trim_ki"
+                law = dict(settings, mode="pd", pd_kp=kp, pd_kd=kd, **{integral: ki})
+                loop, tf_gains = loop_model(model, law), loop_gains(law, kp, kd)
             plant_fmu = FmuInstance(plant_path, f"verify_loop_plant_{index}")
             plant_params = {k: v for k, v in plant_values.items() if k in plant_fmu.variables}
             controllers = {}
@@ -356,20 +408,22 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
             master.initialize(0.0, (steps + 1) * T)
             group = master.output_group("plant", "Real", ["rim_speed_left", "rim_speed_right"])
             rims = []
+            # the reference applied from master step k = 1 on (a step, or a ramp at `ramp`)
+            reference = [step if ramp is None else min(step, ramp * k * T)
+                         for k in range(1, steps + 2)]
             try:
                 master.step(0)
-                for spec in controllers.values():
-                    spec.handle.set_values({"v_ref": step})
                 rims.append(list(master.read_outputs("plant", group)))
                 for k in range(1, steps + 1):
+                    for spec in controllers.values():
+                        spec.handle.set_values({"v_ref": reference[k - 1]})
                     master.step(k)
                     rims.append(list(master.read_outputs("plant", group)))
             finally:
                 master.terminate()
             rims = np.array(rims)
             times = np.arange(steps + 1) * T
-            tf = step * control.step_response(model.closed_loop_tf(kp, kd, ki, "rim"),
-                                              times).outputs
+            tf = filter_through(loop.closed_loop_tf(*tf_gains, "rim"), reference)
             difference = float(np.max(np.abs(rims - tf[:, None])))
             results.append({"mode": mode, "kp": float(kp), "kd": float(kd), "ki": float(ki),
                             "max_abs_difference_m_s": difference,
@@ -377,4 +431,5 @@ def closed_loop_fmu_comparison(model, settings, gain_points, step=0.1, duration=
                             "times": times.tolist(), "tf_rim_speed": tf.tolist(),
                             "fmu_rim_speed_left": rims[:, 0].tolist()})
     return {"step_m_s": float(step), "period_s": float(T), "encoder_ppr": int(encoder_ppr),
+            "ramp_m_s2": None if ramp is None else float(ramp),
             "fmu_overrides": dict(fmu_overrides or {}), "points": results}

@@ -197,6 +197,12 @@ class WheelLoopModel:
         Controller parameters (defaults: :data:`components.control.DEFAULTS`).
     feedforward : bool, optional
         The controller's ``g v_ref`` term.
+    acceleration_feedforward : float, optional
+        The default form's reference model, time constant ``tau_a`` [s] (0: none; only
+        with ``feedforward``): the feedforward drives a nominal first-order wheel to the
+        reference in one period, ``F = g (1 + A (1 - z^-1))`` with ``A = a / (1 - a)``,
+        ``a = exp(-T / tau_a)``, and the feedback compares the measurement with that
+        wheel's window average, ``M(z) r`` (:meth:`reference_model`).
     extra_delay : int, optional
         Additional whole samples between measurement and voltage: 0 for our Gauss-Seidel
         master (the controller reads the sample the plant finished at ``t_k`` and its voltage
@@ -213,6 +219,7 @@ class WheelLoopModel:
     derivative_time_constant: float = CONTROLLER_DEFAULTS["derivative_time_constant"]
     volts_per_speed: float = CONTROLLER_DEFAULTS["volts_per_speed"]
     feedforward: bool = CONTROLLER_DEFAULTS["feedforward"]
+    acceleration_feedforward: float = 0.0
     extra_delay: int = 0
     gain_factor: float = 1.0
     time_constant_factor: float = 1.0
@@ -228,6 +235,10 @@ class WheelLoopModel:
         if not (math.isfinite(self.derivative_time_constant)
                 and self.derivative_time_constant >= 0):
             problems.append(f"derivative_time_constant = {self.derivative_time_constant!r} "
+                            "must be finite and >= 0")
+        if not (math.isfinite(self.acceleration_feedforward)
+                and self.acceleration_feedforward >= 0):
+            problems.append(f"acceleration_feedforward = {self.acceleration_feedforward!r} "
                             "must be finite and >= 0")
         if int(self.extra_delay) != self.extra_delay or self.extra_delay < 0:
             problems.append(f"extra_delay = {self.extra_delay!r} must be an integer >= 0")
@@ -312,13 +323,20 @@ class WheelLoopModel:
     def closed_loop_tf(self, kp, kd, ki=0.0, output="rim"):
         """Reference -> rim speed (``output="rim"``) or -> measured speed (``"measured"``).
 
-        ``G (F + C) / (1 + C H)`` with ``F = g`` the feedforward (0 if switched off).
+        ``G (F + C) / (1 + C H)`` with ``F = g`` the feedforward (0 if switched off); with
+        the reference model, ``G (F + C M) / (1 + C H)`` (:meth:`reference_model`).
         """
         nc, dc = self.controller_poly(kp, kd, ki)
         forward = self.volts_per_speed if self.feedforward else 0.0
         # F + C = (F Dc + Nc) / Dc; 1 + C H = (Dc Dm + Nc Nm) / (Dc Dm).
         drive = np.polyadd(forward * dc, nc)
         characteristic = self.characteristic_polynomial(kp, kd, ki)
+        if self.feedforward and self.acceleration_feedforward:
+            # F = Nf / z and M = Nr / z^2: F + C M = (Nf z Dc + Nc Nr) / (z^2 Dc); the z^2
+            # divides the closed loop's numerator, so it multiplies its denominator.
+            nf, nr = self.reference_model()
+            drive = np.polyadd(np.polymul(np.polymul(nf, [1.0, 0.0]), dc), np.polymul(nc, nr))
+            characteristic = np.polymul(characteristic, [1.0, 0.0, 0.0])
         if output == "rim":
             num = np.polymul(np.polymul(drive, self.rim_num), self.meas_den)
             den = np.polymul(self.rim_den, characteristic)
@@ -332,6 +350,24 @@ class WheelLoopModel:
             raise ConfigError(f"closed-loop output {output!r}: valid choices rim, measured, "
                               "voltage")
         return self._tf(num, den)
+
+    def reference_model(self):
+        """Numerators of the default form's ``F(z) = Nf / z`` and ``M(z) = Nr / z^2``.
+
+        The controller's nominal wheel ``tau_a du/dt = d - u`` (sampled exactly, decay
+        ``a``) is driven to the reference in one period, ``d_k = r_k + A (r_k - u_k)``,
+        so ``u_k = r_k-1`` and ``F = g d / r = g ((1 + A) z - A) / z``; its window average
+        over the next period, ``c u_k + (1 - c) d_k`` with ``c = tau_a (1 - a) / T``, is
+        what the measurement at ``t_k+1`` is compared with:
+        ``M = ((1 - c)(1 + A) z + c - (1 - c) A) / z^2``. Both have DC gain 1 (F: ``g``).
+        """
+        T, tau_a = self.period, self.acceleration_feedforward
+        a = math.exp(-T / tau_a)
+        big_a = a / (1.0 - a)
+        c = tau_a * (1.0 - a) / T
+        nf = self.volts_per_speed * np.array([1.0 + big_a, -big_a])
+        nr = np.array([(1.0 - c) * (1.0 + big_a), c - (1.0 - c) * big_a])
+        return nf, nr
 
     def continuous_characteristic_in_kp(self, kd):
         """``(base, per_kp)`` of the *continuous* PD loop with no sampling and no delay.

@@ -2,8 +2,10 @@
 
 Each function takes the nominal :class:`.loop_model.WheelLoopModel` and the controller
 settings (:data:`components.control.DEFAULTS` with overrides) and returns a plain dict; the
-verdicts are given in :mod:`.checks`. The FGS-PD and fixed PD are analysed with their
-integral trim (``trim_ki``), the form the controller runs; the PID with its own gains.
+verdicts are given in :mod:`.checks`. The FGS-PD and fixed PD are analysed in the form the
+settings select (:mod:`.designs`: each frozen (kp, kd) of the paper's boxes mapped onto the
+loop model's gains, with the form's integral and feedforward); the PID with its own gains.
+Grid entries keep kp and kd in the form's own units and carry the loop's gains as ``loop``.
 """
 
 import math
@@ -16,9 +18,10 @@ from components.control.inference import FuzzyGainScheduler
 
 from .analysis import analyse_gains, controller_cross_check, incremental_form, kp_edge, \
     routh_bounds, stability_boundary
+from .designs import integral_gain, is_default_form, loop_gains, loop_model
 from .robustness import largest_stable_gain_factor, plant_grid, robustness_point
 
-__all__ = ["gain_surface", "reachable_gains", "surface_distances", "paper_box",
+__all__ = ["form_boundary", "gain_surface", "reachable_gains", "surface_distances", "paper_box",
            "pid_baseline", "robustness", "gain_factor_edges", "gain_sets", "routh_finding",
            "core_cross_check", "pd_forms", "paper_case1", "PAPER_BOX_SIGNED",
            "FINE_TIME_CONSTANT_FACTORS"]
@@ -32,7 +35,30 @@ FINE_TIME_CONSTANT_FACTORS = tuple(float(2.0 ** (k / 6)) for k in range(-6, 7))
 
 
 def _trim(settings):
-    return float(settings["trim_ki"])
+    return integral_gain(settings)
+
+
+def _kp_scale(settings):
+    """Loop kp per unit kp of the form (the default form's gain_scale; 1 for the paper's)."""
+    return float(settings["gain_scale"]) if is_default_form(settings) else 1.0
+
+
+def _analysis(model, settings, kp, kd):
+    """One frozen gain set of the form, analysed on the loop; kp, kd in the form's units."""
+    loop = loop_gains(settings, kp, kd)
+    result = asdict(analyse_gains(loop_model(model, settings), *loop))
+    result.update(kp=float(kp), kd=float(kd), loop=list(loop))
+    return result
+
+
+def form_boundary(model, settings, kd):
+    """The kp stability edge at ``kd`` (form units), in the form's kp units."""
+    loop_kp, loop_kd, ki = loop_gains(settings, 1.0, kd)
+    boundary = stability_boundary(model, loop_kd, ki)
+    def form_units(value):
+        return None if value is None else value / loop_kp
+    return dict(boundary, kd=float(kd), kp_routh=form_units(boundary["kp_routh"]),
+                kp_roots=form_units(boundary["kp_roots"]), loop_kd=loop_kd)
 
 
 def gain_surface(model, settings, grid_size):
@@ -47,8 +73,8 @@ def gain_surface(model, settings, grid_size):
     ki = _trim(settings)
     kps = np.linspace(settings["kp_min"], settings["kp_max"], int(grid_size))
     kds = np.linspace(settings["kd_min"], settings["kd_max"], int(grid_size))
-    grid = [asdict(analyse_gains(model, kp, kd, ki)) for kd in kds for kp in kps]
-    boundaries = [stability_boundary(model, kd, ki) for kd in kds]
+    grid = [_analysis(model, settings, kp, kd) for kd in kds for kp in kps]
+    boundaries = [form_boundary(model, settings, kd) for kd in kds]
     stable = [g for g in grid if g["stable_roots"]]
     summary = {
         "gain_margin_min": min(g["gain_margin"] for g in grid),
@@ -85,25 +111,31 @@ def reachable_gains(settings, points=41):
     return np.array(sorted(gains))
 
 
-def surface_distances(model, gains, ki):
+def surface_distances(model, gains, settings):
     """Stability of each gain set and its distance to the kp edge (``kp_edge(kd) / kp``).
+
+    ``gains`` are (kp, kd) in the form's units; the edge and the ratio are the loop's (a
+    ratio does not depend on the unit).
 
     Returns
     -------
     dict
-        ``points`` (kp, kd, spectral radius, kp edge, edge ratio), ``unstable`` count,
-        ``min_edge_ratio`` and where it occurs.
+        ``points`` (kp, kd, spectral radius, kp edge in the form's units, edge ratio),
+        ``unstable`` count, ``min_edge_ratio`` and where it occurs.
     """
     edges = {}
     points = []
     for kp, kd in gains:
-        if kd not in edges:
-            edges[kd] = kp_edge(model, kd, ki)
-        radius = float(np.max(np.abs(np.roots(model.characteristic_polynomial(kp, kd, ki)))))
-        edge = edges[kd]
-        ratio = edge / kp if kp > 0 else math.inf
+        loop_kp, loop_kd, ki = loop_gains(settings, kp, kd)
+        if loop_kd not in edges:
+            edges[loop_kd] = kp_edge(model, loop_kd, ki)
+        radius = float(np.max(np.abs(np.roots(
+            model.characteristic_polynomial(loop_kp, loop_kd, ki)))))
+        edge = edges[loop_kd]
+        ratio = edge / loop_kp if loop_kp > 0 else math.inf
         points.append({"kp": float(kp), "kd": float(kd), "spectral_radius": radius,
-                       "kp_edge": edge, "edge_ratio": ratio})
+                       "kp_edge": edge * kp / loop_kp if loop_kp > 0 else edge,
+                       "edge_ratio": ratio})
     worst = min(points, key=lambda p: (p["spectral_radius"] < 1.0, p["edge_ratio"]))
     return {"points": points, "count": len(points),
             "unstable": sum(1 for p in points if p["spectral_radius"] >= 1.0),
@@ -111,11 +143,13 @@ def surface_distances(model, gains, ki):
             "worst": worst}
 
 
-def paper_box(model, ki, box=None, points=9):
+def paper_box(model, settings, box=None, points=9):
     """The paper's gain box on our convention: its edge and interior grid, with distances.
 
     Parameters
     ----------
+    settings : dict
+        The paper form's controller parameters (its trim is the loop's integral).
     box : dict, optional
         ``kp_min, kp_max, kd_min, kd_max`` on e = r - y; default
         :data:`components.control.fgs_pd.PAPER_TO_OURS` (the mapped paper ranges).
@@ -124,8 +158,9 @@ def paper_box(model, ki, box=None, points=9):
     kps = np.linspace(box["kp_min"], box["kp_max"], points)
     kds = np.linspace(box["kd_min"], box["kd_max"], points)
     gains = [(float(kp), float(kd)) for kd in kds for kp in kps]
-    result = surface_distances(model, gains, ki)
+    result = surface_distances(model, gains, settings)
     result.update(box=box, paper_signed=PAPER_BOX_SIGNED)
+    ki = _trim(settings)
     literal = model.characteristic_polynomial(-box["kp_min"], -box["kd_min"], ki)
     result["literal_signs_spectral_radius"] = float(np.max(np.abs(np.roots(literal))))
     return result
@@ -133,6 +168,7 @@ def paper_box(model, ki, box=None, points=9):
 
 def pid_baseline(model, settings):
     """Frozen analysis of the PID baseline and its kp stability edge."""
+    model = loop_model(model, dict(settings, mode="pid"))
     result = asdict(analyse_gains(model, settings["pid_kp"], settings["pid_kd"],
                                   settings["pid_ki"]))
     result["boundary"] = stability_boundary(model, settings["pid_kd"], settings["pid_ki"])
@@ -145,16 +181,14 @@ def gain_sets(settings):
     Returns
     -------
     dict
-        ``fgs_pd`` / ``pd`` / ``pid`` -> list of ``(kp, kd, ki)``; FGS-PD and PD carry the
-        integral trim.
+        ``fgs_pd`` / ``pd`` / ``pid`` -> list of ``(kp, kd, ki)`` on the loop model
+        (:func:`.designs.loop_gains`); FGS-PD and PD carry their form's integral.
     """
-    ki = _trim(settings)
+    corners = [(settings[f"kp_{a}"], settings[f"kd_{b}"]) for a, b in
+               (("min", "min"), ("min", "max"), ("max", "min"), ("max", "max"))]
     return {
-        "fgs_pd": [(settings["kp_min"], settings["kd_min"], ki),
-                   (settings["kp_min"], settings["kd_max"], ki),
-                   (settings["kp_max"], settings["kd_min"], ki),
-                   (settings["kp_max"], settings["kd_max"], ki)],
-        "pd": [(settings["pd_kp"], settings["pd_kd"], ki)],
+        "fgs_pd": [loop_gains(settings, kp, kd) for kp, kd in corners],
+        "pd": [loop_gains(settings, settings["pd_kp"], settings["pd_kd"])],
         "pid": [(settings["pid_kp"], settings["pid_kd"], settings["pid_ki"])],
     }
 
@@ -164,9 +198,10 @@ def robustness(model, settings, gain_factors, time_constant_factors,
     """FGS-PD (surface corners), fixed PD and PID on every plant variant of the grid."""
     sets = gain_sets(settings)
     variants = plant_grid(gain_factors, time_constant_factors)
+    models = {name: loop_model(model, dict(settings, mode=name)) for name in controllers}
     return {"trim_ki": _trim(settings), "gain_factors": list(map(float, gain_factors)),
             "time_constant_factors": list(map(float, time_constant_factors)),
-            "points": {name: [asdict(robustness_point(model, v, name, sets[name]))
+            "points": {name: [asdict(robustness_point(models[name], v, name, sets[name]))
                               for v in variants] for name in controllers}}
 
 
@@ -198,12 +233,21 @@ def routh_finding(model, settings):
 
 
 def core_cross_check(model, settings):
-    """The real controller core on the sampled plant vs the TF: middle of the surface, PID."""
+    """The real controller core on the sampled plant vs the TF: middle of the surface, PID.
+
+    The core runs the form of ``settings`` in fixed-PD mode at the box's middle (no voltage
+    limit); the TF is the loop model with that form's gains and feedforward.
+    """
     mid_kp = 0.5 * (settings["kp_min"] + settings["kp_max"])
     mid_kd = 0.5 * (settings["kd_min"] + settings["kd_max"])
-    return {"pd_mid": controller_cross_check(model, mid_kp, mid_kd, _trim(settings)),
-            "pid": controller_cross_check(model, settings["pid_kp"], settings["pid_kd"],
-                                          settings["pid_ki"], mode="pid"),
+    core = dict(settings, mode="pd", pd_kp=mid_kp, pd_kd=mid_kd, v_supply=1e9)
+    pd_model = loop_model(model, core)
+    pid = dict(settings, mode="pid", v_supply=1e9)
+    return {"pd_mid": controller_cross_check(pd_model, *loop_gains(settings, mid_kp, mid_kd),
+                                             controller=core),
+            "pid": controller_cross_check(loop_model(model, pid), settings["pid_kp"],
+                                          settings["pid_kd"], settings["pid_ki"],
+                                          controller=pid),
             "step_m_s": 0.05}
 
 
@@ -215,8 +259,8 @@ def pd_forms(model, settings):
 
 
 def paper_case1(settings, plant=None, period=0.02):
-    """Paper Case 1 on the nonlinear plant core: FGS-PD (as configured and without the trim)
-    and the CPID, every other controller setting as given (:mod:`.case1`).
+    """Paper Case 1 on the nonlinear plant core: FGS-PD as configured, in the paper's form
+    and as the paper's pure PD, and the CPID, every other setting as given (:mod:`.case1`).
 
     Returns
     -------
@@ -224,9 +268,13 @@ def paper_case1(settings, plant=None, period=0.02):
         ``results`` (controller -> wheel -> metrics), ``period_s``, ``trim_ki``.
     """
     from .case1 import compare
+    from .designs import design_settings
 
+    paper = design_settings(settings, "paper")
     configs = {"fgs_pd": dict(settings, mode="fgs_pd"),
-               "fgs_pd_pure": dict(settings, mode="fgs_pd", trim_ki=0.0),
+               "fgs_pd_paper": paper,
+               "fgs_pd_pure": dict(paper, trim_ki=0.0),
                "pid": dict(settings, mode="pid")}
     return {"results": compare(configs, h=period, plant_parameters=plant),
-            "period_s": float(period), "trim_ki": _trim(settings)}
+            "period_s": float(period), "trim_ki": _trim(settings),
+            "form": settings.get("form", "default")}

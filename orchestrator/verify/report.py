@@ -8,6 +8,7 @@ number of failed checks (the CLI's exit status).
 """
 
 import math
+import tempfile
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -24,15 +25,19 @@ from orchestrator.report.markdown import write_markdown
 from . import checks as C
 from . import robust_checks as R
 from . import measure
-from .analysis import stability_boundary
+from .designs import DESIGNS, design_settings, integral_gain
+from .fmu_requirements import fmu_requirements
+from .requirement_checks import design_lines, requirement_checks
+from .requirement_runs import measure_requirements
+from .wheel_experiments import judged_cells
 from .fmu_runs import (
-    closed_loop_fmu_comparison, compliance_bound, controller_fmu_comparison, fmu_step_comparison,
-    fmu_variants,
+    built_fmu, closed_loop_fmu_comparison, compliance_bound, controller_fmu_comparison,
+    fmu_step_comparison, fmu_variants,
 )
 from .loop_model import WheelLoopModel
 
 __all__ = ["VerificationReport", "verify", "DEFAULT_OUT_DIR", "model_statement",
-           "robustness_grid"]
+           "robustness_grid", "off_nominal"]
 
 DEFAULT_OUT_DIR = "runs/verify"
 
@@ -76,8 +81,10 @@ class VerificationReport:
                       "figures": self.figures}, indent=indent)
 
     def summary_lines(self):
-        """One console line per check, then the counts."""
-        lines = [f"{c.verdict:7s} {c.name}: {c.measured}" for c in self.checks]
+        """Which design meets which off-nominal requirement, one console line per check,
+        then the counts."""
+        lines = design_lines(self.checks)
+        lines += [f"{c.verdict:7s} {c.name}: {c.measured}" for c in self.checks]
         s = self.summary()
         lines.append(f"{s['passed']} passed, {s['failed']} failed, {s['warnings']} warning(s) "
                      f"of {s['checks']} checks")
@@ -86,8 +93,18 @@ class VerificationReport:
 
 def model_statement(model, settings):
     """Sign convention, model and controller form in a few sentences (top of every report)."""
-    form = (f"integral trim ki = {settings['trim_ki']:g} 1/s on e/e_range"
-            if settings["trim_ki"] > 0 else "pure PD (no integral trim)")
+    if settings.get("form", "default") == "default":
+        form = (f"the default form (docs/control.md): voltage = g d + g s (kp e + kd T_d de) + "
+                f"g k_i integral(e) with s = {settings['gain_scale']:g}, T_d = "
+                f"{settings['derivative_time']:g} s, k_i = {settings['integral_gain']:g} 1/s, "
+                f"d the drive of a nominal wheel (tau_a = "
+                f"{settings['acceleration_feedforward']:g} s) to the reference in one period, "
+                "e measured against that wheel's window average, the integral emptied at a "
+                "zero reference")
+    else:
+        form = ("the paper form: " + (f"integral trim ki = {settings['trim_ki']:g} 1/s on "
+                                      "e/e_range" if settings["trim_ki"] > 0
+                                      else "pure PD (no integral trim)"))
     return [
         "Sign convention: e = v_ref - v_meas (positive when the wheel is too slow), every "
         "gain positive. The paper writes its error as y - r, so its Kp in [-4, -3], Kd in "
@@ -102,8 +119,9 @@ def model_statement(model, settings):
         f" + g e_range (kp e/e_range + kd de/de_range + ki integral), g = "
         f"{settings['volts_per_speed']:.4f} V s/m, e_range = {settings['e_range']:g} m/s, "
         f"de_range = {settings['de_range']:g} m/s^2, derivative filter "
-        f"{settings['derivative_time_constant']:g} s. FGS-PD and PD: {form}; PID: ki = "
-        f"{settings['pid_ki']:g} 1/s. Each gain set is analysed frozen (linear time-invariant).",
+        f"{settings['derivative_time_constant']:g} s. FGS-PD and PD: {form}; PID (the "
+        f"paper's CPID in both forms): ki = {settings['pid_ki']:g} 1/s. Each gain set is "
+        "analysed frozen (linear time-invariant).",
     ]
 
 
@@ -206,9 +224,30 @@ def _judge(f, settings, req):
     return out
 
 
+def off_nominal(settings, plant, req, fmu=True, fmu_dir=None):
+    """The off-nominal requirements of every design: the discrete-time loop over the whole
+    grid, and the FMUs on the judged wheels (when ``fmu``).
+
+    Returns
+    -------
+    dict
+        ``judged`` (cells), ``grid`` (the grid table), ``model`` and ``fmu``: design ->
+        requirement -> per-cell results (``fmu`` empty without the FMUs).
+    """
+    grid = req["off_nominal_grid"]
+    judged = judged_cells(grid)
+    designs = {name: design_settings(settings, name) for name in DESIGNS}
+    result = {"judged": judged, "grid": dict(grid),
+              "model": {name: measure_requirements(s, plant, req) for name, s in designs.items()},
+              "fmu": {}}
+    if fmu:
+        result["fmu"] = fmu_requirements(designs, plant, req, judged, fmu_dir=fmu_dir)
+    return result
+
+
 def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters=None,
            grid_size=11, period=None, extra_delay=0, fmu=True, step_voltage=2.0, plots=True,
-           requirements=None, strict=False):
+           requirements=None, strict=False, fmu_dir=None):
     """Verify the wheel-speed loop, judge every check and write the reports.
 
     Parameters
@@ -237,6 +276,9 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
         or its parsed tables.
     strict : bool, optional
         Recorded in the summary: warnings count as failures.
+    fmu_dir : path-like, optional
+        A folder holding RobotPlant.fmu and WheelController.fmu built from this checkout
+        (used as they are), or to build them into; default a temporary folder.
 
     Returns
     -------
@@ -260,8 +302,9 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
          "model": _model_figures(model, plant)}
     f["surface"] = measure.gain_surface(model, settings, grid_size)
     f["reachable"] = measure.surface_distances(model, measure.reachable_gains(settings),
-                                               settings["trim_ki"])
-    f["paper_box"] = measure.paper_box(model, settings["trim_ki"])
+                                               settings)
+    paper = design_settings(settings, "paper")
+    f["paper_box"] = measure.paper_box(model, paper)
     f["pid"] = measure.pid_baseline(model, settings)
     f["core_cross_check"] = measure.core_cross_check(model, settings)
     gains, taus = robustness_grid(req)
@@ -272,30 +315,42 @@ def verify(out_dir=DEFAULT_OUT_DIR, plant_parameters=None, controller_parameters
     f["robustness"] = measure.robustness(model, settings, gains, taus)
     f["gain_factor_edges"] = measure.gain_factor_edges(
         model, settings, sorted(set(measure.FINE_TIME_CONSTANT_FACTORS) | set(taus)))
-    pure = dict(settings, trim_ki=0.0)
     f["robustness_pure_pd"] = measure.robustness(
-        model, pure, gains, taus, controllers=("fgs_pd",))["points"]["fgs_pd"]
+        model, dict(paper, trim_ki=0.0), gains, taus, controllers=("fgs_pd",))["points"]["fgs_pd"]
     f["routh_finding"] = measure.routh_finding(model, settings)
     f["paper_case1"] = measure.paper_case1(settings, plant, model.period)
     f["pd_forms"] = measure.pd_forms(model, settings)
     if extra_delay == 0:
         jacobi = replace(model, extra_delay=1)
-        f["jacobi_boundaries"] = [stability_boundary(jacobi, kd, settings["trim_ki"])
+        f["jacobi_boundaries"] = [measure.form_boundary(jacobi, settings, kd)
                                   for kd in (settings["kd_min"], settings["kd_max"])]
     if fmu:
+        # every FMU is built once, before any is loaded (fmu_runs.built_fmu says why)
+        scratch = tempfile.TemporaryDirectory(prefix="sonotrack_verify_")
+        fmu_dir = Path(fmu_dir or scratch.name)
+        for name in ("RobotPlant", "WheelController"):
+            built_fmu(name, fmu_dir)
         f["fmu_step"] = fmu_step_comparison(plant, voltage=step_voltage, duration=2.0,
-                                            step=model.period, variants=fmu_variants(plant))
+                                            step=model.period, variants=fmu_variants(plant),
+                                            fmu_dir=fmu_dir)
         f["fmu_step_bound_m_s"] = compliance_bound(plant, step_voltage)
         f["controller_fmu"] = controller_fmu_comparison(
-            settings, samples=req["controller_fmu_vs_law"]["samples"], h=model.period)
+            settings, samples=req["controller_fmu_vs_law"]["samples"], h=model.period,
+            fmu_dir=fmu_dir)
         if extra_delay == 0:
-            ki = settings["trim_ki"]
+            ki = integral_gain(settings)
             points = [("pd", settings["kp_min"], settings["kd_min"], ki),
                       ("pd", settings["kp_max"], settings["kd_max"], ki),
                       ("pid", settings["pid_kp"], settings["pid_kd"], settings["pid_ki"])]
             f["closed_loop_fmus"] = closed_loop_fmu_comparison(
-                model, settings, points, step=req["closed_loop_fmus_vs_tf"]["step_m_s"])
-    report = VerificationReport(f, _judge(f, settings, req))
+                model, settings, points, step=req["closed_loop_fmus_vs_tf"]["step_m_s"],
+                ramp=req["closed_loop_fmus_vs_tf"].get("ramp_m_s2"), fmu_dir=fmu_dir)
+    f["off_nominal"] = off_nominal(settings, plant, req, fmu=fmu,
+                                   fmu_dir=fmu_dir if fmu else None)
+    if fmu:
+        scratch.cleanup()
+    report = VerificationReport(f, _judge(f, settings, req)
+                                + requirement_checks(f["off_nominal"], req))
     f["robustness_statement"] = robustness_statement(req, report.checks)
     if plots:
         from .figures import write_figures

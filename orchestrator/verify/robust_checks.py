@@ -12,7 +12,7 @@ from .checks import _check
 __all__ = ["check_robust_stability", "check_robust_stability_beyond",
            "check_robust_steady_state"]
 
-_LABELS = {"fgs_pd": "the paper's gain box (FGS-PD surface corners)",
+_LABELS = {"fgs_pd": "the FGS-PD (the paper's gain box, its surface corners)",
            "pd": "the fixed PD", "pid": "the CPID"}
 
 

@@ -17,7 +17,7 @@ from orchestrator.verify import (
     fmu_step_comparison, load_requirements, verify,
 )
 from orchestrator.verify import checks as C
-from tests.support.html_render import ChromiumUnavailable, chromium_path, render_image_count
+from tests.support.html_render import ChromiumUnavailable, chromium_path, inspect_report
 
 pytestmark = pytest.mark.integration
 
@@ -25,9 +25,9 @@ REQ = load_requirements()
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory):
+def report(tmp_path_factory, fmu_dir):
     out = tmp_path_factory.mktemp("verify")
-    return verify(out, grid_size=3, step_voltage=2.0), out
+    return verify(out, grid_size=3, step_voltage=2.0, fmu_dir=fmu_dir), out
 
 
 def test_verify_writes_the_reports_with_checks_and_verdicts(report):
@@ -61,8 +61,24 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     assert "![" in markdown and "](stability_region.png)" in markdown
     assert str(out) not in markdown
     # The largest stable plant-gain factor, and every warning, stated in the text.
-    assert "FGS-PD corners (weakest corner): stable up to x2.61 plant gain at tau x0.5" in markdown
-    assert "### Failures and findings a designer must read" in markdown
+    assert ("FGS-PD corners (weakest corner): stable up to x3.4 plant gain at tau x0.5 "
+            "(kp 4.8, kd 0.24)") in markdown
+    # the off-nominal requirements: which design meets what, first, and each requirement
+    summary = markdown.split("## Contents")[0]
+    assert ("FGS-PD, default form: meets settling, load recovery, ramp lag, creep, limit cycle; "
+            "fails slip chatter.") in summary
+    assert "FGS-PD, paper form: meets none" in summary
+    assert "## Off-nominal requirements" in markdown
+    for name in ("off_nominal_settling", "load_step_recovery", "ramp_lag", "no_creep",
+                 "no_limit_cycle", "no_slip_chatter"):
+        for design in ("default", "paper", "pid"):
+            assert f"{name}_{design}" in names
+    assert verdicts["off_nominal_settling_default"] and verdicts["no_creep_default"]
+    assert not verdicts["no_slip_chatter_default"]
+    # the answer first: the summary (counts, then each finding), the contents, the checks
+    assert markdown.index("## Summary") < markdown.index("## Contents") < markdown.index(
+        "## Checks")
+    assert "`" not in (out / "verification.html").read_text()   # no raw markup for readers
     assert "`fgs_pd_overshoot_vs_pid`" in markdown.split("## Figures")[0]
     assert len(data["figures"]["gain_factor_edges"]["sets"]) == 6
 
@@ -93,32 +109,35 @@ def test_html_is_self_contained_and_renders_with_every_figure(report):
         pytest.skip("chromium not installed (make chromium needs apt and root); checked "
                     "instead that every image is embedded PNG data")
     try:
-        loaded, total = render_image_count(out / "verification.html")
+        seen = inspect_report(out / "verification.html", screenshot=out / "verification.png")
     except ChromiumUnavailable as exc:
         pytest.skip(f"chromium did not render: {exc}")
-    assert (loaded, total) == (len(sources), len(sources))
+    assert seen["images"] == [len(sources), len(sources)]
+    assert seen["summary_top"] is not None and seen["summary_top"] < 300
+    assert seen["contents"] and seen["anchors"] > 5 and seen["broken_anchors"] == []
+    assert seen["verdict_cells"] >= len(result.checks) and seen["unclassed_verdicts"] == []
 
 
-def test_plant_fmu_check_fails_for_another_resistance(tmp_path):
+def test_plant_fmu_check_fails_for_another_resistance(fmu_dir):
     p = PlantParameters()
-    run = fmu_step_comparison(p, voltage=2.0, duration=2.0, step=0.02, fmu_dir=tmp_path,
+    run = fmu_step_comparison(p, voltage=2.0, duration=2.0, step=0.02, fmu_dir=fmu_dir,
                               fmu_overrides={"motor_resistance": 1.5 * p.motor_resistance})
     check = C.check_plant_fmu_vs_tf(run, compliance_bound(p, 2.0), REQ["plant_fmu_vs_tf"])
     assert not check.passed and check.verdict == "FAIL"
 
 
-def test_controller_fmu_check_fails_for_another_gain(tmp_path):
+def test_controller_fmu_check_fails_for_another_gain(fmu_dir):
     run = controller_fmu_comparison(dict(DEFAULTS), modes=("fgs_pd",), samples=30,
-                                    fmu_dir=tmp_path, fmu_overrides={"kp_max": 5.0})
+                                    fmu_dir=fmu_dir, fmu_overrides={"kp_max": 5.0})
     check = C.check_controller_fmu_vs_law(run, REQ["controller_fmu_vs_law"])
     assert not check.passed
     assert run["runs"]["fgs_pd"]["max_voltage_difference_v"] > 0.01
 
 
-def test_closed_loop_fmu_check_fails_for_another_gain(tmp_path):
+def test_closed_loop_fmu_check_fails_for_another_gain(fmu_dir):
     model = WheelLoopModel()
     run = closed_loop_fmu_comparison(model, dict(DEFAULTS), [("pd", 3.0, 0.3, 1.0)],
-                                     duration=0.6, fmu_dir=tmp_path,
+                                     duration=0.6, fmu_dir=fmu_dir,
                                      fmu_overrides={"pd_kp": 6.0})
     check = C.check_closed_loop_fmus_vs_tf(run, REQ["closed_loop_fmus_vs_tf"])
     assert not check.passed

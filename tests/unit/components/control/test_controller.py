@@ -1,4 +1,8 @@
-"""Control laws of the wheel controller against analytic results."""
+"""Control laws of the wheel controller against analytic results.
+
+The paper form's laws (the PD of Eq. 46, its integral trim, the CPID); the default form's are
+in test_default_form.py.
+"""
 
 import math
 
@@ -69,7 +73,7 @@ def test_pd_feedforward_steady_state_error_matches_analysis(delta):
     # The pure PD of Eq. (46) (integral trim off).
     kp = DEFAULTS["pd_kp"]
     g_ctrl = DEFAULTS["volts_per_speed"]
-    ctl = WheelSpeedController(mode="pd", trim_ki=0.0)
+    ctl = WheelSpeedController(mode="pd", form="paper", trim_ki=0.0)
     v_ref = 0.3
     v = _first_order_loop(ctl, v_ref, g_ctrl / (1.0 + delta), 2000)
     expected = -delta * v_ref / (1.0 + (1.0 + delta) * kp)
@@ -85,19 +89,19 @@ def test_integral_trim_removes_the_steady_state_error_for_any_motor_constant(mod
     # 0 for every g_true the loop is stable with; the pure PD's would be the formula above.
     g_ctrl = DEFAULTS["volts_per_speed"]
     v_ref = 0.3
-    ctl = WheelSpeedController(mode=mode)
+    ctl = WheelSpeedController(mode=mode, form="paper")
     assert ctl.trim_ki == DEFAULTS["trim_ki"] > 0.0
     # The slowest mode (needs-4x) decays with ~7.5 s: 400 s leave e^-50 of the start error.
     v = _first_order_loop(ctl, v_ref, g_ctrl / (1.0 + delta), 20_000)
     assert abs(v_ref - v) < 1e-6 * v_ref
-    pure = _first_order_loop(WheelSpeedController(mode="pd", trim_ki=0.0), v_ref,
+    pure = _first_order_loop(WheelSpeedController(mode="pd", form="paper", trim_ki=0.0), v_ref,
                              g_ctrl / (1.0 + delta), 3000)
     kp = DEFAULTS["pd_kp"]
     assert v_ref - pure == pytest.approx(-delta * v_ref / (1.0 + (1.0 + delta) * kp), abs=1e-9)
 
 
 def test_integral_trim_is_the_pid_integrator_with_the_pd_gains():
-    trimmed = WheelSpeedController(mode="pd", trim_ki=0.7, feedforward=False)
+    trimmed = WheelSpeedController(mode="pd", form="paper", trim_ki=0.7, feedforward=False)
     pid = WheelSpeedController(mode="pid", pid_kp=DEFAULTS["pd_kp"], pid_kd=DEFAULTS["pd_kd"],
                                pid_ki=0.7, feedforward=False)
     rng = np.random.default_rng(3)
@@ -108,7 +112,7 @@ def test_integral_trim_is_the_pid_integrator_with_the_pd_gains():
 
 
 def test_pd_without_feedforward_keeps_proportional_error():
-    ctl = WheelSpeedController(mode="pd", feedforward=False, trim_ki=0.0)
+    ctl = WheelSpeedController(mode="pd", form="paper", feedforward=False, trim_ki=0.0)
     v_ref = 0.3
     v = _first_order_loop(ctl, v_ref, DEFAULTS["volts_per_speed"], 2000)
     assert v_ref - v == pytest.approx(v_ref / (1.0 + DEFAULTS["pd_kp"]), rel=1e-9)
@@ -116,7 +120,7 @@ def test_pd_without_feedforward_keeps_proportional_error():
 
 @pytest.mark.parametrize("method", ["weighted", "mamdani"], ids=["weighted", "mamdani"])
 def test_fgs_pd_with_matched_feedforward_has_no_steady_state_error(method):
-    ctl = WheelSpeedController(mode="fgs_pd", fuzzy_method=method)
+    ctl = WheelSpeedController(mode="fgs_pd", form="paper", fuzzy_method=method)
     v = _first_order_loop(ctl, 0.342, DEFAULTS["volts_per_speed"], 20_000)  # trim tail: ~5 s
     assert abs(0.342 - v) < 1e-9
     # At rest on the reference (e = de = 0, rule Z/Z) both Kp' and Kd' are Big.
@@ -131,7 +135,7 @@ def test_pid_without_feedforward_removes_steady_state_error():
 
 
 def test_voltage_limited_to_supply():
-    ctl = WheelSpeedController(mode="fgs_pd")
+    ctl = WheelSpeedController(mode="fgs_pd", form="paper")
     assert ctl.step(5.0, 0.0, H) == pytest.approx(11.1)
     assert ctl.step(-5.0, 0.0, H) == pytest.approx(-11.1)
 
@@ -180,7 +184,7 @@ def test_reset_restores_construction_state():
 
 def _sagging_supply_loop(measured, sag=1.0, v_ref=0.3):
     """Exact first-order wheel whose driver clips at a supply that sags from 5 s to 10 s."""
-    controller = WheelSpeedController()   # fgs_pd with the integral trim (the default)
+    controller = WheelSpeedController(form="paper")   # fgs_pd with the paper form's trim
     g, nominal = DEFAULTS["volts_per_speed"], DEFAULTS["v_supply"]
     decay = math.exp(-H / TAU_MOTOR)
     v, speeds, integrals = 0.0, [], []
@@ -194,7 +198,7 @@ def _sagging_supply_loop(measured, sag=1.0, v_ref=0.3):
     return np.array(speeds), np.array(integrals)
 
 
-def test_trim_does_not_wind_up_while_a_measured_supply_sag_saturates_the_driver():
+def test_paper_trim_does_not_wind_up_while_a_measured_supply_sag_saturates_the_driver():
     speeds, integrals = _sagging_supply_loop(measured=True)
     sag_start, sag_end = int(5.0 / H), int(10.0 / H)
     # analytic reference: held at 1 V from the step before the sag, the wheel decays to
@@ -211,7 +215,7 @@ def test_trim_does_not_wind_up_while_a_measured_supply_sag_saturates_the_driver(
     assert speeds[sag_end:].max() <= max(speeds[:sag_start].max(), 0.3 * 1.01)
 
 
-def test_without_the_supply_measurement_the_trim_winds_up_and_overshoots():
+def test_without_the_supply_measurement_the_paper_trim_winds_up_and_overshoots():
     # the broken input: the controller limits at its nominal 11.1 V, never saturates, and
     # integrates the sag's whole speed deficit: with 1 V applied throughout, the error is
     # e_k = (v_0 - v_inf)(1 - d^k), d = exp(-H / tau), summed over the sag's steps

@@ -176,3 +176,19 @@ def test_step_figures_equal_python_controls_step_info(model, kp, kd, ki):
         (info["Overshoot"], info["RiseTime"], info["SettlingTime"]), abs=1e-12)
     # Never settling inside the window is inf, not the window's end.
     assert step_figures(y[:5], times[:5], final_value(tf))[2] == float("inf")
+
+
+def test_filter_through_is_the_tfs_response_and_plain_lfilter_is_early():
+    import control
+    from scipy.signal import lfilter
+
+    from orchestrator.verify.analysis import filter_through
+
+    model = WheelLoopModel()
+    tf = model.closed_loop_tf(3.5, 1.15, 0.5)
+    times = np.arange(60) * model.period
+    expected = control.step_response(tf, times).outputs
+    assert np.max(np.abs(filter_through(tf, np.ones(60)) - expected)) < 1e-10
+    # the broken input: lfilter on the unpadded coefficients runs ahead of the TF
+    early = lfilter(tf.num[0][0], tf.den[0][0], np.ones(60))
+    assert np.max(np.abs(early - expected)) > 1e-3
