@@ -1,4 +1,5 @@
-# sonotrack: everything a fresh clone needs, from a machine with Python 3.11 and make.
+# sonotrack: everything a fresh clone needs, from a machine with Python 3.11, make and a C
+# compiler.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
@@ -10,41 +11,87 @@ SCENARIO ?= scenarios/s_curve.toml
 # C source and header in orchestrator/builder/fmi_binary/ (a change to any of them rebuilds it). The
 # library carries the sha256 of those sources; `sonotrack build` refuses one built from others.
 FMI_BINARY := orchestrator/builder/fmi_binary/linux64/sonotrack_fmi2.so
-FMI_SOURCES := $(wildcard orchestrator/builder/fmi_binary/*.c)
+# The process-wide lock is a library of its own that every copy of the main library needs by name
+# (process_lock.c says why); the main library finds it beside itself ($ORIGIN).
+FMI_LOCK := orchestrator/builder/fmi_binary/linux64/libsonotrack_fmi2_lock.so.1
+FMI_LOCK_SOURCE := orchestrator/builder/fmi_binary/process_lock.c
+FMI_SOURCES := $(filter-out $(FMI_LOCK_SOURCE),$(wildcard orchestrator/builder/fmi_binary/*.c))
+FMI_LINK = -L$(dir $(FMI_LOCK)) -l:$(notdir $(FMI_LOCK)) -Wl,-rpath,'$$ORIGIN' -ldl -lpthread
 FMI_HEADERS := $(wildcard orchestrator/builder/fmi_binary/*.h)
-FMI_CC ?= gcc
+# The shipped library is compiled by zig's C compiler (PyPI package ziglang, pinned in
+# constraints.txt, installed into the venv) for glibc $(FMI_GLIBC): it links against that
+# release's symbol versions, so it loads on any x86_64 Linux with glibc >= 2.17 whatever glibc
+# the building machine has, and a libc call newer than that fails to link instead of raising
+# the floor (docs/fmi_binary.md, "glibc"). FMI_CC=gcc builds for this machine's glibc instead.
+FMI_GLIBC := 2.17
+ZIG_STAMP := $(VENV)/.ziglang
+FMI_CC ?= $(BIN)/python-zig cc -target x86_64-linux-gnu.$(FMI_GLIBC) -g0
 COMMA := ,
 FMI_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wformat=2 -Wconversion -Wsign-conversion \
 	-Wmissing-prototypes -Wstrict-prototypes -Wpointer-arith -Wcast-qual -Wundef -Wvla
 
-.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary fmi-binary-sanitized tbb
+.PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary fmi-binary-sanitized tbb \
+	python-check cc-check debian11-root
 
 install: $(STAMP)
 
 fmi-binary: $(FMI_BINARY)
 
-# $(call FMI_COMPILE,<extra flags>,<output>): the sources' hash and fmpy's headers come from the
-# venv's Python.
+# $(call FMI_COMPILE,<extra flags>,<output>,<sources and libraries>): the sources' hash and fmpy's
+# headers come from the venv's Python.
 FMI_COMPILE = mkdir -p $(dir $(2)) && \
 	hash="$$($(BIN)/python -c 'from orchestrator.builder.fmi_binary import source_hash; print(source_hash())')" && \
 	headers="$$($(BIN)/python -c 'import fmpy, os; print(os.path.join(os.path.dirname(fmpy.__file__), "c-code"))')" && \
 	$(FMI_CC) -std=c11 -fPIC -shared $(FMI_WARNINGS) -fvisibility=hidden $(1) \
 		-DSONOTRACK_SOURCE_SHA256="\"$$hash\"" -I"$$headers" \
-		-o $(2) $(FMI_SOURCES) -ldl -lpthread
+		-o $(2) $(3)
+
+# One line, before anything is compiled, when there is no C compiler to compile with.
+cc-check:
+	@command -v $(firstword $(FMI_CC)) >/dev/null 2>&1 || { echo "no C compiler: '$(FMI_CC)' not found; \
+	install one (Debian: apt-get install gcc) or name it: make FMI_CC=/path/to/cc"; exit 1; }
 
 # Makefile: a change to the compile flags rebuilds it too (the source hash covers only the C).
-$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) Makefile $(STAMP)
-	$(call FMI_COMPILE,-O2,$@)
+$(ZIG_STAMP): constraints.txt $(STAMP)
+	$(BIN)/python -m pip install --quiet -c constraints.txt ziglang
+	touch $@
+
+$(FMI_BINARY): $(FMI_SOURCES) $(FMI_HEADERS) $(FMI_LOCK) Makefile $(STAMP) $(ZIG_STAMP)
+	@$(MAKE) --no-print-directory cc-check
+	$(call FMI_COMPILE,-O2,$@,$(FMI_SOURCES) $(FMI_LINK))
+
+# It records the hash of all the sources too, so any change rebuilds it.
+$(FMI_LOCK): $(FMI_LOCK_SOURCE) $(FMI_SOURCES) $(FMI_HEADERS) Makefile $(STAMP) $(ZIG_STAMP)
+	@$(MAKE) --no-print-directory cc-check
+	$(call FMI_COMPILE,-O2 -Wl$(COMMA)-soname$(COMMA)$(notdir $@),$@,$< -lpthread)
 
 # Test only: the same sources under AddressSanitizer and UBSan, into FMI_SANITIZED_OUT (the C host
 # test builds it into a temporary folder and runs it in an ASan-built host; never put in an FMU).
 FMI_SANITIZED_OUT ?= build/sonotrack_fmi2_sanitized.so
-fmi-binary-sanitized: $(FMI_SOURCES) $(FMI_HEADERS) $(STAMP)
+fmi-binary-sanitized: FMI_CC = gcc
+fmi-binary-sanitized: $(FMI_SOURCES) $(FMI_HEADERS) $(FMI_LOCK) $(STAMP)
 	$(call FMI_COMPILE,-O1 -g -fno-omit-frame-pointer -fsanitize=address$(COMMA)undefined \
-		-fno-sanitize-recover=undefined,$(FMI_SANITIZED_OUT))
+		-fno-sanitize-recover=undefined,$(FMI_SANITIZED_OUT),$(FMI_SOURCES) $(FMI_LINK))
+
+# PYTHON must be a 3.11 (requires-python in pyproject.toml: the pinned wheels are 3.11's); one
+# line with the fix otherwise. A $(VENV) made by another Python (an earlier attempt with the
+# wrong one) is removed so that it is made again.
+PY_VERSION = import sys; print("%d.%d" % sys.version_info[:2]); sys.exit(sys.version_info[:2] != (3, 11))
+python-check:
+	@version="$$($(PYTHON) -c '$(PY_VERSION)' 2>/dev/null)" || { echo "sonotrack needs \
+	Python 3.11; PYTHON='$(PYTHON)' is $${version:-not a working Python}: install python3.11 \
+	(Debian: apt-get install python3.11-venv) or run make PYTHON=/path/to/python3.11"; exit 1; }; \
+	if [ -e $(VENV) ]; then \
+	  made="$$($(BIN)/python -c '$(PY_VERSION)' 2>/dev/null)"; \
+	  if [ "$$made" != "$$version" ]; then \
+	    echo "$(VENV) was made by Python $${made:-(broken)}, not $$version: making it again"; \
+	    rm -rf $(VENV); \
+	  fi; \
+	fi
 
 # constraints.txt pins every package to the versions the project was tested with.
 $(STAMP): pyproject.toml constraints.txt
+	@$(MAKE) --no-print-directory python-check
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade "pip>=24"
 	$(BIN)/python -m pip install --quiet -c constraints.txt -e ".[test]"
@@ -69,6 +116,37 @@ chromium:
 	    >/dev/null 2>&1)) || echo "chromium: apt-get install failed; browser checks will skip"; \
 	else echo "chromium: not root or no apt-get; browser checks will skip"; fi
 
+# A Debian 11 (glibc 2.31, no Python) minimal root for the FMI binary's glibc-floor test
+# (tests/integration/orchestrator/builder/fmi_binary/test_old_glibc.py), made once by debootstrap
+# (installed from Debian when we are root and apt works; Debian's default mirror) and kept outside
+# the repository (SONOTRACK_DEBIAN11_ROOT, the test reads the same variable). Never fails the
+# build: where it cannot be made, the test says why it skipped.
+SONOTRACK_DEBIAN11_ROOT ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/sonotrack/roots/debian11
+DEBIAN11_ROOT := $(SONOTRACK_DEBIAN11_ROOT)
+debian11-root:
+	@if [ -e "$(DEBIAN11_ROOT)/.complete" ]; then :; \
+	elif [ "$$(id -u)" != 0 ]; then echo "debian11-root: not root; the old-glibc test will skip"; \
+	else \
+	  if ! command -v debootstrap >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing Debian debootstrap for the old-glibc test"; \
+	    DEBIAN_FRONTEND=noninteractive apt-get install -y debootstrap >/dev/null 2>&1 || \
+	    (apt-get update >/dev/null 2>&1 && \
+	    DEBIAN_FRONTEND=noninteractive apt-get install -y debootstrap >/dev/null 2>&1); \
+	  fi; \
+	  if ! command -v debootstrap >/dev/null 2>&1; then \
+	    echo "debian11-root: debootstrap cannot be installed; the old-glibc test will skip"; \
+	  else \
+	    echo "making a Debian 11 minimal root in $(DEBIAN11_ROOT) (once, a few minutes)"; \
+	    rm -rf "$(DEBIAN11_ROOT).partial" && mkdir -p "$(dir $(DEBIAN11_ROOT))" && \
+	    debootstrap --variant=minbase bullseye "$(DEBIAN11_ROOT).partial" \
+	      >"$(dir $(DEBIAN11_ROOT))debootstrap.log" 2>&1 && \
+	    rm -rf "$(DEBIAN11_ROOT)" && mv "$(DEBIAN11_ROOT).partial" "$(DEBIAN11_ROOT)" && \
+	    touch "$(DEBIAN11_ROOT)/.complete" || \
+	    echo "debian11-root: debootstrap failed (see $(dir $(DEBIAN11_ROOT))debootstrap.log); \
+	the old-glibc test will skip"; \
+	  fi; \
+	fi
+
 # ecos (the C++ engine in the ecospy wheel) needs Debian's libtbb12 to start; the ecos tests
 # (tests/integration/orchestrator/hosts/test_ecos.py) skip, saying why, where it cannot be installed.
 tbb:
@@ -81,7 +159,7 @@ tbb:
 	    || echo "libtbb12: apt-get install failed; ecos tests will skip"; \
 	else echo "libtbb12: not root or no apt-get; ecos tests will skip"; fi
 
-test: $(STAMP) chromium tbb $(FMI_BINARY)
+test: $(STAMP) chromium tbb debian11-root $(FMI_BINARY)
 	$(BIN)/python -m pytest -q
 
 test-unit: $(STAMP) chromium $(FMI_BINARY)
@@ -91,4 +169,4 @@ benchmarks: fmus
 	for script in benchmarks/[!_]*.py; do $(BIN)/python $$script || exit 1; done
 
 clean:
-	rm -rf $(VENV) $(FMI_BINARY) $(FMU_DIR)/*.fmu $(FMU_DIR)/*.ssp runs .pytest_cache
+	rm -rf $(VENV) $(FMI_BINARY) $(FMI_LOCK) $(FMU_DIR)/*.fmu $(FMU_DIR)/*.ssp runs .pytest_cache

@@ -17,6 +17,10 @@ Measured side by side in one run (alternating repetitions, medians reported):
   the cheapest one (``fmi2GetReal`` of one value), is a floor under our stepping time, and
   libcosim's time over it bounds the speed-up any master making these calls could show;
 * in-process: the same slave classes composed without FMI (``backend="in-process"``);
+* ``room``: scenarios/room.toml (the default S-curve in the paper's 7 x 7 m room, the localizer
+  hearing image sources) against the same scenario with ``localizer.room = false`` (free
+  field), alternating, each run's wall time from its summary (set-up and stepping); target:
+  the room within 3x (issue 22). ``--room-only`` measures this alone;
 * ``run_command``: a whole default ``sonotrack run`` command in a fresh process (as a user
   types it, with its progress bar and plots; and with ``--no-plots``), split into start-up
   (interpreter, imports, argument parsing), set-up (system, FMU instances, renderers),
@@ -26,12 +30,18 @@ Measured side by side in one run (alternating repetitions, medians reported):
   renderer and with the plots drawn in-process (what each piece buys), the summary's figures
   from the kept rows against re-reading results.csv, and the interpreter and import floors.
 
+* ``system_fmu``: the whole-system FMU (``sonotrack build --system``) against ``sonotrack run
+  --no-plots`` of the same scenario, cost per simulated second and their ratio, as whole
+  commands and as stepping alone (benchmarks/_system_fmu.py).
+
 The run-command part is benchmarks/_run_command.py, the libcosim comparison
-benchmarks/_libcosim_compare.py; this script is the one entry point.
+benchmarks/_libcosim_compare.py, the system FMU benchmarks/_system_fmu.py; this script is the
+one entry point.
 
 Writes benchmarks/results/cosim_speed.json.
 
-    python benchmarks/cosim_speed.py [--repeats 3] [--single-rate-stop 10]
+    python benchmarks/cosim_speed.py [--repeats 3] [--single-rate-stop 10] [--room-only]
+                                     [--system-fmu-only]
 """
 
 import argparse
@@ -44,6 +54,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _libcosim_compare  # noqa: E402
 import _run_command  # noqa: E402
+import _system_fmu  # noqa: E402
 from _common import build_fresh, median, write_result  # noqa: E402
 from _libcosim_compare import INSTANCES  # noqa: E402
 from _run_command import PHASES, VARIANTS  # noqa: E402
@@ -57,6 +68,33 @@ def run_default(fmu_dir, backend, out):
     result = run_scenario(ROOT / "scenarios" / "s_curve.toml", out, progress=False,
                           fmu_dir=fmu_dir, plots=False, backend=backend)
     return result.summary
+
+
+def run_room(fmu_dir, room, out):
+    """scenarios/room.toml, in its room or (``room`` false) in free field; the summary."""
+    from orchestrator.run.runner import run_scenario
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(ROOT / "scenarios" / "room.toml")
+    if not room:
+        scenario = scenario.with_overrides(parameters={"localizer.room": False})
+    return run_scenario(scenario, out, progress=False, fmu_dir=fmu_dir, plots=False).summary
+
+
+def room_against_free_field(fmu_dir, work, repeats):
+    """Wall times of the room scenario in its room and in free field, alternating."""
+    walls = {"room": [], "free_field": []}
+    for r in range(repeats):
+        for name in walls:
+            summary = run_room(fmu_dir, name == "room", work / f"{name}{r}")
+            walls[name].append(summary["wall_time_s"])
+        print(f"room scenario run {r + 1}/{repeats}: {walls['room'][-1]:.2f} s in the room, "
+              f"{walls['free_field'][-1]:.2f} s in free field", flush=True)
+    return {"scenario": "scenarios/room.toml (free field: localizer.room = false)",
+            "room_wall_s": median(walls["room"]), "free_field_wall_s": median(walls["free_field"]),
+            "room_runs_s": walls["room"], "free_field_runs_s": walls["free_field"],
+            "room_over_free_field": median(walls["room"]) / median(walls["free_field"]),
+            "room_over_free_field_target": 3.0}
 
 
 def instance_steps(scenario_path):
@@ -105,7 +143,30 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=3, help="repetitions of each timing")
     parser.add_argument("--single-rate-stop", type=float, default=10.0,
                         help="simulated seconds of the libcosim comparison")
+    parser.add_argument("--room-only", action="store_true",
+                        help="only the room against free field (writes cosim_speed_room.json)")
+    parser.add_argument("--system-fmu-only", action="store_true",
+                        help="only the system FMU against sonotrack run (writes "
+                             "cosim_speed_system_fmu.json)")
     args = parser.parse_args(argv)
+    if args.system_fmu_only:
+        fmus = build_fresh(["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner",
+                            "WheelController"])
+        work = Path(tempfile.mkdtemp(prefix="sonotrack_cosim_speed_"))
+        record = _system_fmu.measure(next(iter(fmus.values())).parent, work, args.repeats)
+        print(_system_fmu.summary_line(record))
+        print(f"wrote {write_result('cosim_speed_system_fmu', record)}")
+        return 0
+    if args.room_only:
+        load_at_start = os.getloadavg()[0]
+        fmus = build_fresh(["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner",
+                            "WheelController"])
+        work = Path(tempfile.mkdtemp(prefix="sonotrack_cosim_speed_"))
+        room = room_against_free_field(next(iter(fmus.values())).parent, work, args.repeats)
+        room["load_average"] = [load_at_start, os.getloadavg()[0]]
+        out = write_result("cosim_speed_room", room)
+        print(f"room / free field {room['room_over_free_field']:.2f} (target <= 3); wrote {out}")
+        return 0
 
     load_at_start = os.getloadavg()[0]
     fmus = build_fresh(["RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner",
@@ -124,6 +185,8 @@ def main(argv=None):
         inprocess_wall.append(summary_in["wall_time_s"])
         print(f"default scenario run {r + 1}/{args.repeats}: RTF {fmi_rtf[-1]:.1f} (FMI), "
               f"{inprocess_rtf[-1]:.1f} (in-process)", flush=True)
+
+    room = room_against_free_field(fmu_dir, work, args.repeats)
 
     commands = _run_command.measure(fmu_dir, work, args.repeats)
 
@@ -148,6 +211,7 @@ def main(argv=None):
 
     single_rate = _libcosim_compare.compare(fmu_dir, fmus["WheelController"], work,
                                             args.repeats, args.single_rate_stop)
+    system_fmu = _system_fmu.measure(fmu_dir, work / "system_fmu", args.repeats)
 
     record = {
         "scenario": "scenarios/s_curve.toml",
@@ -167,10 +231,12 @@ def main(argv=None):
         "fmi_over_in_process_wall_ratio": median(fmi_wall) / median(inprocess_wall),
         "fmi_over_in_process_target": 3.0,
         "libcosim_single_rate": single_rate,
+        "system_fmu": system_fmu,
     }
     out = write_result("cosim_speed", record)
     print(f"realtime factor {record['realtime_factor']:.1f} (target 20); FMI/in-process "
-          f"{record['fmi_over_in_process_wall_ratio']:.2f} (target <= 3)")
+          f"{record['fmi_over_in_process_wall_ratio']:.2f} (target <= 3); room / free field "
+          f"{room['room_over_free_field']:.2f} (target <= 3)")
     for name in ("every_output", "trajectory"):
         row = single_rate[name]
         print(f"ours vs libcosim, {name}: {row['speedup_ours_over_libcosim']:.2f}x wall, "
@@ -185,6 +251,7 @@ def main(argv=None):
         print(f"sonotrack run ({name.replace('_', ' ')}): {command['wall_s']:.2f} s; not "
               f"stepping {command['not_stepping_share']:.0%} (target <= 40 %): " +
               ", ".join(f"{p} {command['phase_shares'][p]:.0%}" for p in PHASES))
+    print(_system_fmu.summary_line(system_fmu))
     print(f"wrote {out}")
     return 0
 

@@ -1,13 +1,16 @@
-"""Cost of FMI calls through sonotrack's FMU binary against pythonfmu's, on the same slave.
+"""Cost of FMI calls through sonotrack's FMU binary against pythonfmu's and against our library
+before issue 23, on the same slave; FMU sizes; fmi2Instantiate times in a C host.
 
-WheelController is built twice from this checkout: once as ``sonotrack build`` ships it (our
-binary) and once with pythonfmu 0.7.0's linux64 binary put back. Both are loaded in one Python
-process and called through their raw ctypes functions (as the master's hot path calls them):
+WheelController is built from this checkout as ``sonotrack build`` ships it (our binary), then
+copied with pythonfmu 0.7.0's linux64 binary put back, and with our library as it was at
+benchmarks/_fmi_binary_builds.REFERENCE_COMMIT (gcc -O2, as ``make`` built it then). All three
+are loaded in one Python process and called through their raw ctypes functions (as the master's
+hot path calls them):
 
 * ``getReal`` of 1 and of 20 values, ``setReal`` of the 2 inputs, ``doStep`` (which includes the
   controller's own computation, the same in both);
-* each measured as a batch of calls, the two binaries alternating batch by batch (their order
-  swapped every repetition); medians of the per-call times and of the per-pair ratios. Times are
+* each measured as a batch of calls, the binaries alternating batch by batch (their order
+  rotated every repetition); medians of the per-call times and of the per-pair ratios. Times are
   the calling thread's CPU time (``time.thread_time``): on a shared machine, wall time also
   counts the time the process waits for a core, which made single batches 10x slower here;
 * ``doStep`` also split into the model's own ``do_step`` (the slave class called directly in
@@ -17,11 +20,16 @@ process and called through their raw ctypes functions (as the master's hot path 
 Also: the default scenario's stepping time (scenarios/s_curve.toml, summary ``wall_time_s``) with
 all five FMUs built each way, one fresh process per run, runs alternating; and the RSS growth
 over 500 instantiate/free cycles of WheelController with our binary (with sys.path and
-sys.modules unchanged). Target: ours <= 0.7x pythonfmu's per call.
+sys.modules unchanged). Targets: ours <= 0.7x pythonfmu's per call; ours within +-10 % of the
+reference library per call (issue 23: thread safety, the Python search and the glibc 2.17
+build must not cost per call). Also the size of every FMU (and what it unpacks to), and the
+wall time of the first fmi2Instantiate in a fresh C host process (the library starts Python
+and loads the model) and of a later one, per FMU (medians of --instantiate-runs processes).
 
 Writes benchmarks/results/fmi_call_cost.json.
 
     python benchmarks/fmi_call_cost.py [--repeats 21] [--calls 5000] [--scenario-runs 3]
+                                       [--instantiate-runs 11]
 """
 
 import argparse
@@ -36,10 +44,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import median, write_result  # noqa: E402
+from _fmi_binary_builds import (REFERENCE_COMMIT, c_host_instantiate_times, fmu_sizes,  # noqa: E402
+                                reference_library, with_library)
 
 ROOT = Path(__file__).resolve().parent.parent
 NAMES = ("RobotPlant", "SoundSource", "AcousticLocalizer", "CurvaturePlanner", "WheelController")
 TARGET_RATIO = 0.7
+REFERENCE_TOLERANCE = 0.10
 
 
 def build_both(names, out):
@@ -51,6 +62,9 @@ def build_both(names, out):
     for name in names:
         paths["ours"][name] = build_fmu(name, out / "ours")
         paths["pythonfmu"][name] = restore_pythonfmu_binary(build_fmu(name, out / "pythonfmu"))
+    paths["reference"] = {"WheelController": with_library(
+        paths["ours"]["WheelController"], reference_library(out),
+        out / "reference" / "WheelController.fmu")}
     return paths
 
 
@@ -111,36 +125,40 @@ class Raw:
 
 
 def call_costs(paths, repeats, calls):
-    ours, theirs = Raw(paths["ours"]["WheelController"], "ours"), \
-        Raw(paths["pythonfmu"]["WheelController"], "pythonfmu")
-    # both return the same numbers before anything is timed
-    a, b = ours.operations(), theirs.operations()
-    for ops in (a, b):
-        ops["setReal_2"](1)
-        ops["doStep"](1)
-        ops["getReal_20"](1)
-    assert list(ours.out20) == list(theirs.out20), "the two builds disagree"
+    """Per-call CPU time of each binary's WheelController ("ours" first) and the ratios of ours
+    to each other, medians over interleaved batches."""
+    labels = list(paths)
+    raws = {label: Raw(paths[label]["WheelController"], label) for label in labels}
+    ops = {label: raws[label].operations() for label in labels}
+    for label in labels:  # all return the same numbers before anything is timed
+        ops[label]["setReal_2"](1)
+        ops[label]["doStep"](1)
+        ops[label]["getReal_20"](1)
+    assert all(list(raws[label].out20) == list(raws["ours"].out20) for label in labels), \
+        "the builds disagree"
     result = {}
-    for name in a:
+    for name in ops["ours"]:
         batch = calls if name != "doStep" else max(1, calls // 10)
-        per_call = {"ours": [], "pythonfmu": []}
-        ratios = []
+        per_call = {label: [] for label in labels}
+        ratios = {label: [] for label in labels if label != "ours"}
         for r in range(repeats):
             timings = {}
-            order = (("ours", a), ("pythonfmu", b)) if r % 2 == 0 else \
-                (("pythonfmu", b), ("ours", a))
-            for label, ops in order:
+            for label in labels[r % len(labels):] + labels[:r % len(labels)]:
                 started = time.thread_time()
-                ops[name](batch)
+                ops[label][name](batch)
                 timings[label] = (time.thread_time() - started) / batch
-            per_call["ours"].append(timings["ours"])
-            per_call["pythonfmu"].append(timings["pythonfmu"])
-            ratios.append(timings["ours"] / timings["pythonfmu"])
-        result[name] = {"ours_us": median(per_call["ours"]) * 1e6,
-                        "pythonfmu_us": median(per_call["pythonfmu"]) * 1e6,
-                        "ratio_median_of_pairs": median(ratios),
-                        "calls_per_batch": batch, "pairs": repeats,
-                        "target_met": median(ratios) <= TARGET_RATIO}
+            for label in labels:
+                per_call[label].append(timings[label])
+            for label in ratios:
+                ratios[label].append(timings["ours"] / timings[label])
+        row = {f"{label}_us": median(per_call[label]) * 1e6 for label in labels}
+        row.update({f"ratio_to_{label}": median(ratios[label]) for label in ratios})
+        row.update({"calls_per_batch": batch, "rounds": repeats,
+                    "target_met": row["ratio_to_pythonfmu"] <= TARGET_RATIO})
+        if "reference" in ratios:
+            row["within_tolerance_of_reference"] = \
+                abs(row["ratio_to_reference"] - 1.0) <= REFERENCE_TOLERANCE
+        result[name] = row
     return result
 
 
@@ -230,6 +248,7 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=21)
     parser.add_argument("--calls", type=int, default=5000)
     parser.add_argument("--scenario-runs", type=int, default=3)
+    parser.add_argument("--instantiate-runs", type=int, default=11)
     args = parser.parse_args(argv)
 
     sys.path.insert(0, str(ROOT))
@@ -247,8 +266,12 @@ def main(argv=None):
     step["overhead_ratio"] = step["overhead_ours_us"] / step["overhead_pythonfmu_us"]
     for name, row in costs.items():
         print(f"{name:11s} ours {row['ours_us']:7.2f} us  pythonfmu {row['pythonfmu_us']:7.2f} us"
-              f"  ratio {row['ratio_median_of_pairs']:.3f}"
-              f"  ({'met' if row['target_met'] else 'NOT met'}: <= {TARGET_RATIO})")
+              f"  ratio {row['ratio_to_pythonfmu']:.3f}"
+              f"  ({'met' if row['target_met'] else 'NOT met'}: <= {TARGET_RATIO});"
+              f"  reference ({REFERENCE_COMMIT}) {row['reference_us']:7.2f} us  ratio "
+              f"{row['ratio_to_reference']:.3f} ("
+              f"{'met' if row['within_tolerance_of_reference'] else 'NOT met'}: within "
+              f"+-{REFERENCE_TOLERANCE:.0%})")
     print(f"doStep: the model's own do_step {model_us:.2f} us; binary overhead ours "
           f"{step['overhead_ours_us']:.2f} us, pythonfmu {step['overhead_pythonfmu_us']:.2f} us, "
           f"ratio {step['overhead_ratio']:.3f}")
@@ -263,11 +286,25 @@ def main(argv=None):
     cycles = instantiate_free_cycles(paths["ours"]["WheelController"], 500)
     print(f"500 instantiate/free cycles: RSS +{cycles['rss_growth_kib']} KiB, sys.path unchanged "
           f"{cycles['path_unchanged']}, modules added {cycles['modules_added']}")
+    sizes = fmu_sizes(paths["ours"])
+    for name, size in sizes.items():
+        print(f"{name}.fmu: {size['fmu_bytes'] / 1e3:.1f} kB ({size['unpacked_bytes'] / 1e3:.1f} kB "
+              f"unpacked)")
+    instantiate = c_host_instantiate_times(paths["ours"], args.instantiate_runs, out)
+    for name, row in instantiate.items():
+        print(f"C host fmi2Instantiate {name}: first {row['first_ms']:.1f} ms (fresh process: "
+              f"Python started, model loaded), later {row['later_ms']:.2f} ms")
     path = write_result("fmi_call_cost", {
         "description": "FMI call cost through sonotrack's binary vs pythonfmu 0.7.0's on "
                        "WheelController, raw ctypes calls from one Python process, interleaved "
                        "batches; default scenario stepping time with each binary",
         "target_ratio": TARGET_RATIO,
+        "reference_commit": REFERENCE_COMMIT,
+        "reference_tolerance": REFERENCE_TOLERANCE,
+        "fmu_sizes": {"plain": sizes,
+                      "portable": "not built: `sonotrack build --portable` (issue 23, item 6) "
+                                  "is not implemented"},
+        "c_host_instantiate": {"plain": instantiate, "portable": None},
         "calls": costs,
         "ctypes_floor_us": floor,
         "default_scenario": scenario,

@@ -106,6 +106,9 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
         script = stage / f"{name}.py"
         script.write_text(entry_script(slave_file.read_text(), private, subpackage))
         saved_path = list(sys.path)
+        # before and after: pythonfmu imports the entry script by the model's name, and a
+        # module of that name left by an earlier build or a loaded FMU would be used instead
+        _forget_modules(name, private)
         try:
             fmu_path = FmuBuilder.build_FMU(script, dest=dest_dir / f"{name}.fmu",
                                             project_files=[package_dir] + [
@@ -115,16 +118,21 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
             raise BuildError(f"FMU {name}: pythonfmu build failed: {exc!r}") from exc
         finally:
             sys.path[:] = saved_path
-            for module in [m for m in sys.modules if m == name or m == private
-                           or m.startswith(private + ".")]:
-                del sys.modules[module]
-            importlib.invalidate_caches()
+            _forget_modules(name, private)
     _check_built(Path(fmu_path), name)
     install_binary(fmu_path, private, name, name)
     # last: metadata and documentation/index.html from the final modelDescription.xml
     document_fmu(fmu_path, slave_file,
                  notes_file or components_dir.parent / "docs" / f"{subpackage}.md")
     return Path(fmu_path)
+
+
+def _forget_modules(name, private):
+    """Drop the entry module ``name`` and the private package from ``sys.modules``."""
+    for module in [m for m in sys.modules if m == name or m == private
+                   or m.startswith(private + ".")]:
+        del sys.modules[module]
+    importlib.invalidate_caches()
 
 
 def carried_package(name, components_dir, parts, resources=()):

@@ -1,13 +1,17 @@
 """What the tests of sonotrack's own FMI binary share: the C host's plans and checks, an fmpy
 host with a logger that keeps every message, and the probe slave whose do_step does what an
-input says. The fixtures built from these live in tests/integration/orchestrator/builder/fmi_binary/conftest.py.
+input says. The fixtures built from these live in tests/integration/orchestrator/builder/fmi_binary/conftest.py;
+running FMUs from many threads is tests/support/fmi_threads.py, reading a library's glibc needs
+tests/support/elf_versions.py.
 
-The test modules, one concept each (docs/fmi_binary.md states the contract they check):
-``test_fmi_binary_c_host`` (a compiled C host, also under AddressSanitizer),
-``test_fmi_binary_refusals`` (every refusal class and status mapping), ``test_fmi_binary_calls``
-(string and FMU-state round trips), ``test_fmi_binary_lifetime`` (instantiate/free cycles,
-unload and reload) and ``test_fmi_binary_builds`` (two builds of one model in one process);
-tests/unit/orchestrator/builder/test_fmi_binary.py checks which C sources a library was compiled from.
+The test modules in tests/integration/orchestrator/builder/fmi_binary/, one concept each
+(docs/fmi_binary.md states the contract they check): ``test_c_host`` (a compiled C host, also
+under AddressSanitizer), ``test_refusals`` (every refusal class and status mapping),
+``test_calls`` (string and FMU-state round trips), ``test_lifetime`` (instantiate/free cycles,
+unload and reload), ``test_builds`` (two builds of one model in one process), ``test_time_checks``,
+``test_threads``, ``test_isolation``, ``test_finding_python`` and ``test_old_glibc``;
+tests/unit/orchestrator/builder/test_fmi_binary.py checks which C sources a library was compiled
+from and which glibc it needs.
 """
 
 import os
@@ -64,7 +68,8 @@ def fmi_headers():
 def host_env():
     """The caller's environment minus anything that would help the FMU find Python."""
     return {k: v for k, v in os.environ.items()
-            if k not in ("LD_PRELOAD", "PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
+            if k not in ("LD_PRELOAD", "PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV",
+                         "SONOTRACK_PYTHON", "SONOTRACK_LIBPYTHON")}
 
 
 def _ports(description, inputs):
@@ -79,23 +84,29 @@ def _ports(description, inputs):
     return variables, groups
 
 
-def plan(extracted, names):
-    """The C host's plan text and, per FMU, (step, drive, typed input and output names)."""
-    header = [f"{len(names)} {STEPS}"]
+def plan(extracted, names, steps=STEPS):
+    """The C host's plan text and, per FMU, (step, drive, typed input and output names).
+
+    ``names`` are model names, each run from its folder in ``extracted``; an entry may also be
+    a tuple (model name, folder, description, instance name), to run one model several times
+    in one plan, from one folder or from several copies.
+    """
+    entries = [entry if isinstance(entry, tuple) else (entry, *extracted[entry], f"c_{entry}")
+               for entry in names]
+    header = [f"{len(entries)} {steps}"]
     layouts = []
-    for name in names:
-        folder, description = extracted[name]
+    for name, folder, description, instance in entries:
         h, drive = DRIVES[name]
         variables, groups = _ports(description, drive(0.0))
         binary = folder / "binaries" / "linux64" / f"{description.coSimulation.modelIdentifier}.so"
-        fields = [str(binary), description.guid, (folder / "resources").as_uri(), f"c_{name}",
+        fields = [str(binary), description.guid, (folder / "resources").as_uri(), instance,
                   repr(h)]
         for group in groups:
             fields += [str(len(group))] + [str(variables[n].valueReference) for n in group]
         header.append(" ".join(fields))
         layouts.append((h, drive, groups))
     rows = []
-    for k in range(STEPS):
+    for k in range(steps):
         for h, drive, groups in layouts:
             values = drive(k * h)
             rows.append(" ".join([repr(float(values[n])) for n in groups[0]] +
@@ -104,7 +115,7 @@ def plan(extracted, names):
     return "\n".join(header + rows) + "\n", layouts
 
 
-def fmpy_reference(extracted, name):
+def fmpy_reference(extracted, name, steps=STEPS):
     """The same inputs and steps through fmpy (in this process): outputs after every step."""
     from fmpy.fmi2 import FMU2Slave
 
@@ -120,7 +131,7 @@ def fmpy_reference(extracted, name):
     slave.exitInitializationMode()
     vr = [[variables[n].valueReference for n in group] for group in groups]
     rows = []
-    for k in range(STEPS):
+    for k in range(steps):
         values = drive(k * h)
         if vr[0]:
             slave.setReal(vr[0], [float(values[n]) for n in groups[0]])

@@ -3,11 +3,14 @@
 pythonfmu builds the FMU (model description, resources with the slave's Python code); then
 :func:`install_binary` replaces pythonfmu's ``binaries/linux64/<model>.so`` with the library
 compiled by ``make`` from the C sources in this folder (:data:`SOURCES`: ``*.c`` and the private
-header ``sonotrack_fmi2.h``) and writes ``resources/sonotrack_binding.txt``,
+header ``sonotrack_fmi2.h``), puts the process-wide lock library it needs beside it
+(:data:`LOCK_LIBRARY`, ``process_lock.c`` says why) and writes ``resources/sonotrack_binding.txt``,
 the table that library reads at ``fmi2Instantiate``: the GUID, where the slave's code lives, the
 libpython and Python executable of the build (used only by hosts that run no Python) and every
-variable's value reference, type, causality, variability and initial. The win64 binary stays
-pythonfmu's. docs/fmi_binary.md describes the binary's contract.
+variable's value reference, type, causality, variability and initial. It also moves the
+pythonfmu the FMU carries under a private name, run-time modules only (:mod:`.carried_pythonfmu`),
+and deflates every entry. The win64 binary stays pythonfmu's. docs/fmi_binary.md describes the
+binary's contract.
 """
 
 import hashlib
@@ -21,11 +24,15 @@ from xml.etree import ElementTree
 from components.common.errors import BuildError
 from orchestrator.files.atomic import atomic_open
 
-__all__ = ["LIBRARY", "SOURCES", "BINDING_FILE", "build_tag", "source_hash", "library_source_hash",
+from .carried_pythonfmu import carry, installed_runtime
+
+__all__ = ["LIBRARY", "LOCK_LIBRARY", "SOURCES", "BINDING_FILE", "build_tag", "source_hash", "library_source_hash",
            "install_binary", "binding_table", "pythonfmu_binary", "restore_pythonfmu_binary"]
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = HERE / "linux64" / "sonotrack_fmi2.so"
+# Needed by LIBRARY under this name (its soname), from the same folder of the FMU.
+LOCK_LIBRARY = HERE / "linux64" / "libsonotrack_fmi2_lock.so.1"
 BINDING_FILE = "resources/sonotrack_binding.txt"
 # What the library is compiled from: every C source and header in this folder (the Makefile
 # compiles the same glob and embeds source_hash() of it in the library).
@@ -41,7 +48,8 @@ def build_tag(name, sources):
 
     The private package of the FMU is named after this tag, so two builds of one model whose
     code differs in any byte load under different module names in one process, and two builds
-    of identical code may share them.
+    of identical code may share them. The code counted is ``sources`` and the run-time
+    pythonfmu the FMU carries inside that package.
 
     Parameters
     ----------
@@ -61,6 +69,8 @@ def build_tag(name, sources):
                 continue
             digest.update(str(relative).encode() + b"\0")
             digest.update(path.read_bytes() + b"\0")
+    for name, data in sorted(installed_runtime().items()):
+        digest.update(f"pythonfmu/{name}".encode() + b"\0" + data + b"\0")
     return digest.hexdigest()[:12]
 
 
@@ -136,17 +146,36 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
     package, entry, class_name : str
         See :func:`binding_table`.
     library : path-like, optional
-        The compiled binary (default: the one ``make`` builds).
+        The compiled binary (default: the one ``make`` builds); the lock library is taken
+        from the same folder.
 
     Raises
     ------
     BuildError
-        If the library is missing or was not compiled from the C sources now in this folder
-        (its recorded :func:`source_hash` differs): a stale library would put other C code
-        into the FMU than the checkout holds.
+        If the library or the lock library is missing or was not compiled from the C sources
+        now in this folder (its recorded :func:`source_hash` differs): a stale library would
+        put other C code into the FMU than the checkout holds.
     """
     fmu_path = Path(fmu_path)
     library = Path(library)
+    lock = library.with_name(LOCK_LIBRARY.name)
+    for compiled in (library, lock):
+        _check_compiled(compiled)
+    description, identifier = _description(fmu_path)
+    table = binding_table(description, package, entry, class_name).encode()
+
+    def edit(files):
+        carry(files, package, entry)
+        files[f"binaries/linux64/{identifier}.so"] = library.read_bytes()
+        files[f"binaries/linux64/{lock.name}"] = lock.read_bytes()
+        files[BINDING_FILE] = table
+
+    _rewrite(fmu_path, edit)
+    return fmu_path
+
+
+def _check_compiled(library):
+    """Refuse a missing library or one compiled from other sources than the checkout's."""
     if not library.is_file():
         raise BuildError(f"FMI binary {library} is missing: run `make` (target {library.name})")
     built_from, sources = library_source_hash(library), source_hash()
@@ -155,19 +184,18 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
         raise BuildError(f"FMI binary {library} was compiled from other C sources ({recorded}) "
                          f"than {HERE} holds now (sha256 {sources[:12]}): run `make` (target "
                          f"{library.name})")
-    description, identifier = _description(fmu_path)
-    table = binding_table(description, package, entry, class_name).encode()
-    _rewrite(fmu_path, {f"binaries/linux64/{identifier}.so": library.read_bytes(),
-                        BINDING_FILE: table})
-    return fmu_path
 
 
 def restore_pythonfmu_binary(fmu_path):
     """Put pythonfmu's own linux64 binary back into an FMU (for side-by-side comparisons)."""
     fmu_path = Path(fmu_path)
     _, identifier = _description(fmu_path)
-    _rewrite(fmu_path, {f"binaries/linux64/{identifier}.so": pythonfmu_binary().read_bytes(),
-                        BINDING_FILE: None})
+    def edit(files):
+        files[f"binaries/linux64/{identifier}.so"] = pythonfmu_binary().read_bytes()
+        files.pop(f"binaries/linux64/{LOCK_LIBRARY.name}", None)
+        files.pop(BINDING_FILE, None)
+
+    _rewrite(fmu_path, edit)
     return fmu_path
 
 
@@ -181,18 +209,26 @@ def _description(fmu_path):
     return description, identifier
 
 
-def _rewrite(fmu_path, replaced):
-    """Rewrite the zip with ``replaced`` entries (None: removed), atomically."""
+def _rewrite(fmu_path, edit):
+    """Rewrite the zip atomically: ``edit`` changes a dict of its files (name to bytes) in place.
+
+    Every entry is deflated (pythonfmu stores most of them); an entry that stays keeps its
+    metadata, a new one is readable by everyone (executable for a library).
+    """
     with zipfile.ZipFile(fmu_path) as archive:
-        entries = [(info, archive.read(info)) for info in archive.infolist()]
+        infos = {info.filename: info for info in archive.infolist()}
+        files = {name: archive.read(info) for name, info in infos.items()}
+    edit(files)
     with (atomic_open(fmu_path, fsync=False) as stream,
           zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as archive):
-        for info, data in entries:
-            if info.filename not in replaced:
-                archive.writestr(info, data)
-        for name, data in replaced.items():
-            if data is not None:
-                archive.writestr(name, data)
+        for name, data in files.items():
+            info = infos.get(name)
+            if info is None:
+                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                mode = 0o755 if name.startswith("binaries/") else 0o644
+                info.external_attr = (0o100000 | mode) << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            archive.writestr(info, data)
 
 
 def pythonfmu_binary():

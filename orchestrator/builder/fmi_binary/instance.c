@@ -6,9 +6,11 @@
  * allowed in (REQUIRE) and a call in another state is refused with a message listing them.
  */
 #define _GNU_SOURCE
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "sonotrack_fmi2.h"
 
@@ -18,7 +20,7 @@
 
 /* Which sources this library was compiled from: `sonotrack build` reads the string from the file
  * and refuses a library whose sources have changed since (orchestrator.builder.fmi_binary). */
-__attribute__((used)) static const char SOURCE_ID[] =
+__attribute__((used, retain)) static const char SOURCE_ID[] =
     "sonotrack-fmi2-sources sha256 " SONOTRACK_SOURCE_SHA256;
 
 /* The slave and its bound methods, as make() in the Python helpers returns them. */
@@ -96,6 +98,17 @@ static void free_instance(Instance *c, int python_alive) {
     free(c);
 }
 
+/* A refused instantiation also goes to stderr, in one write: some hosts (ecos) log the
+ * refusal at debug level only, then fail on the NULL instance, and the user sees no reason. */
+static void to_stderr(const char *instance, const char *message) {
+    size_t size = strlen(instance) + strlen(message) + 32;
+    char *line = malloc(size);
+    if (line == NULL) return;
+    int n = snprintf(line, size, "sonotrack FMU %s: %s\n", instance, message);
+    if (n > 0 && write(2, line, (size_t)n) < 0) { /* nothing more to do: stderr is gone */ }
+    free(line);
+}
+
 /* ----- FMI 2.0: common functions ----------------------------------------------------------- */
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -109,7 +122,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     fmi2CallbackLogger logger = functions ? functions->logger : NULL;
     fmi2ComponentEnvironment environment = functions ? functions->componentEnvironment : NULL;
     const char *name = instanceName ? instanceName : "";
-    char error[2048] = "";
+    char error[8192] = ""; /* the search for Python names every place it tried */
 #define FAIL(...)                                                                              \
     do {                                                                                       \
         snprintf(error, sizeof error, __VA_ARGS__);                                            \
@@ -124,7 +137,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     c->categories = CAT_EVERY;
     c->visible = visible ? 1 : 0;
     c->mode = M_INSTANTIATED;
-    if (g_fatal) FAIL("fmi2Instantiate: the Python interpreter failed earlier in this process");
+    if (FATAL()) FAIL("fmi2Instantiate: the Python interpreter failed earlier in this process");
     if (instanceName == NULL || instanceName[0] == '\0')
         FAIL("fmi2Instantiate: instanceName must be a non-empty string");
     if (fmuType != fmi2CoSimulation)
@@ -141,11 +154,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     if (fmuGUID == NULL || strcmp(fmuGUID, c->binding.guid) != 0)
         FAIL("fmi2Instantiate: GUID %s does not match this FMU's %s (modelDescription.xml of a "
              "different build?)", fmuGUID ? fmuGUID : "(null)", c->binding.guid);
-    pthread_mutex_lock(&g_lock);
-    int started = g_python_ready || start_python(&c->binding, error + 17, sizeof error - 17) == 0;
-    if (started) g_python_ready = 1;
-    pthread_mutex_unlock(&g_lock);
-    if (!started) {
+    if (ensure_python(&c->binding, error + 17, sizeof error - 17) != 0) {
         memcpy(error, "fmi2Instantiate: ", 17);
         goto failed;
     }
@@ -175,6 +184,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         drop_slave(c);
         if (c->cls) py.DecRef(c->cls);
         c->cls = NULL;
+        free_binding(&c->binding, 1); /* its interned names are dropped with the GIL held */
         py.GILRelease(gil);
         goto failed;
     }
@@ -182,7 +192,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     return c;
 failed:
     emit(logger, environment, name, 1, CAT_ALL, fmi2Error, "logStatusError", error);
-    if (c) free_instance(c, g_python_ready && !g_fatal);
+    to_stderr(name, error);
+    if (c) free_instance(c, 0); /* no Python object is left in it by now */
     return NULL;
 #undef FAIL
 }
@@ -190,7 +201,7 @@ failed:
 void fmi2FreeInstance(fmi2Component component) {
     Instance *c = (Instance *)component;
     if (c == NULL) return;
-    if (g_fatal) { /* never touch a failed interpreter; the Python objects leak */
+    if (FATAL()) { /* never touch a failed interpreter; the Python objects leak */
         free_instance(c, 0);
         return;
     }
@@ -246,6 +257,11 @@ fmi2Status fmi2SetupExperiment(fmi2Component component, fmi2Boolean toleranceDef
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     INSTANCE("fmi2SetupExperiment");
     REQUIRE("fmi2SetupExperiment", M_INSTANTIATED);
+    if (!isfinite(startTime))
+        return refuse(c, "fmi2SetupExperiment: startTime = %g is not a finite time", startTime);
+    if (stopTimeDefined && !(isfinite(stopTime) && stopTime >= startTime))
+        return refuse(c, "fmi2SetupExperiment: stopTime = %.17g must be finite and not before "
+                      "startTime = %.17g", stopTime, startTime);
     int gil = py.GILEnsure();
     PyObject *start = py.FloatFromDouble(startTime);
     PyObject *stop = stopTimeDefined ? py.FloatFromDouble(stopTime) : (py.IncRef(py.None), py.None);

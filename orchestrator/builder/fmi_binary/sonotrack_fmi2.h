@@ -34,7 +34,6 @@
 #include <pthread.h>
 #include <stddef.h>
 #include <stdint.h>
-#include <wchar.h>
 
 #include "fmi2Functions.h"
 
@@ -45,7 +44,6 @@ typedef long Py_ssize_t_;
 
 typedef struct {
     int (*IsInitialized)(void);
-    void (*InitializeEx)(int);
     void *(*EvalSaveThread)(void);
     int (*GILEnsure)(void);
     void (*GILRelease)(int);
@@ -83,18 +81,25 @@ typedef struct {
     PyObject *(*ImportModule)(const char *);
     PyObject *(*RunStringFlags)(const char *, int, PyObject *, PyObject *, void *);
     const char *(*GetVersion)(void);
-    void (*SetProgramName)(const wchar_t *);        /* optional: removed in Python 3.13 */
-    wchar_t *(*DecodeLocale)(const char *, size_t *); /* optional */
     PyObject *None, *True, *False;
 } PythonApi;
 
 extern PythonApi py;
 
-/* The process-wide Python side (python_runtime.c). g_lock guards starting it. */
-extern pthread_mutex_t g_lock;
-extern int g_python_ready;     /* symbols resolved, interpreter running, helpers compiled */
+/* What every copy of this library in a process shares (process_lock.c, built as
+ * libsonotrack_fmi2_lock.so.1, exported from that library only): the one mutex of the process,
+ * and why starting Python failed, if it did ("" otherwise; read and written under the mutex;
+ * START_FAILURE_SIZE bytes), since an interpreter whose start failed cannot be started again. */
+#define START_FAILURE_SIZE 4096
+__attribute__((visibility("default"))) pthread_mutex_t *sonotrack_fmi2_process_lock_v1(void);
+__attribute__((visibility("default"))) char *sonotrack_fmi2_start_failure_v1(void);
+
+/* The Python side of this copy of the library (python_runtime.c). g_fatal is read without the
+ * GIL by every call, so it is accessed atomically (FATAL/SET_FATAL). */
 extern int g_fatal;            /* the interpreter failed: every call returns fmi2Fatal */
 extern PyObject *g_load_class, *g_make, *g_drain, *g_classify, *g_as_state;
+#define FATAL() __atomic_load_n(&g_fatal, __ATOMIC_RELAXED)
+#define SET_FATAL() __atomic_store_n(&g_fatal, 1, __ATOMIC_RELAXED)
 
 /* ----- the binding table (binding.c) ----------------------------------------------------- */
 
@@ -148,14 +153,22 @@ typedef struct {
 #define INSTANCE(function)                                                                     \
     Instance *c = (Instance *)component;                                                       \
     if (c == NULL) return fmi2Error;                                                           \
-    if (g_fatal) return fmi2Fatal;
+    if (FATAL()) return fmi2Fatal;
 
 #define REQUIRE(function, allowed)                                                             \
     if (!(c->mode & (allowed))) return wrong_state(c, function, allowed);                       \
     if (c->slave == NULL) return refuse(c, "%s: the model could not be re-created", function)
 
-/* python_runtime.c */
-int start_python(const Binding *b, char *error, size_t size);
+/* python_runtime.c: 0 once this copy of the library can call Python (any thread, any time) */
+int ensure_python(const Binding *b, char *error, size_t size);
+
+/* python_search.c: the Python to start in a host that runs none. */
+typedef struct {
+    char libpython[4096], program[4096], origin[64]; /* program: argv[0] of the interpreter */
+    int minor;                                       /* Python 3.minor */
+} PythonChoice;
+int find_python(const Binding *b, const char *loaded, PythonChoice *choice, char *error,
+                size_t size);
 
 /* binding.c */
 int lookup(const char *word, const char *const *names, int n);

@@ -152,6 +152,6 @@ fmi2Status python_failure(Instance *c, const char *function, const char *what) {
     emit(c->logger, c->environment, c->name, c->logging_on, c->categories, status, NULL, message);
     if (status == fmi2Error) c->mode = M_ERROR;
     if (status == fmi2Discard) c->mode = M_STEP_FAILED;
-    if (status == fmi2Fatal) g_fatal = 1;
+    if (status == fmi2Fatal) SET_FATAL();
     return status;
 }

@@ -3,7 +3,11 @@
  * do_step returning True is fmi2OK; False is fmi2Discard (the slave logged why; the instance is
  * in stepFailed, from which an FMU state can be restored); an exception maps through
  * python_failure; any other return value is a bug in the slave and gives fmi2Error naming it.
+ * A communication point that is not finite, or a step size that is not positive and finite, is
+ * refused here, before the model sees it: every FMU gets the same check and the same message.
  */
+#include <math.h>
+
 #include "sonotrack_fmi2.h"
 
 fmi2Status fmi2DoStep(fmi2Component component, fmi2Real currentCommunicationPoint,
@@ -11,6 +15,12 @@ fmi2Status fmi2DoStep(fmi2Component component, fmi2Real currentCommunicationPoin
     (void)noSetFMUStatePriorToCurrentPoint;
     INSTANCE("fmi2DoStep");
     REQUIRE("fmi2DoStep", M_STEP_COMPLETE);
+    if (!isfinite(currentCommunicationPoint))
+        return refuse(c, "fmi2DoStep: currentCommunicationPoint = %g is not a finite time",
+                      currentCommunicationPoint);
+    if (!isfinite(communicationStepSize) || !(communicationStepSize > 0.0))
+        return refuse(c, "fmi2DoStep: communicationStepSize = %.17g must be positive and finite",
+                      communicationStepSize);
     int gil = py.GILEnsure();
     PyObject *time = py.FloatFromDouble(currentCommunicationPoint);
     PyObject *step = py.FloatFromDouble(communicationStepSize);

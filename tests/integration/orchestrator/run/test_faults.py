@@ -29,7 +29,13 @@ FIX_PERIOD = 0.1         # the localizer's default, which the scenarios keep
 ENCODER_KINDS = ("encoder_skip", "encoder_freeze")
 
 # Kinds the loop does not survive today, with the measured numbers (seed 1).
-KNOWN_FAILURES = {}
+KNOWN_FAILURES = {
+    "encoder_skip": (
+        "the default wheel-controller form (integral at 22 1/s, model reference) reads the "
+        "skipped counts as a slow wheel and drives it up: body speed 0.450 m/s at t = 5.32 s "
+        "against the 0.42 m/s bound; the paper's form, on the same run, peaks at 0.396 m/s. "
+        "Reported, not tuned (issue 20's closing note)"),
+}
 
 
 def _cases():

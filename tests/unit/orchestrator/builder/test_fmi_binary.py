@@ -13,8 +13,9 @@ import pytest
 
 from components.common.errors import BuildError
 from orchestrator.builder.fmus import REPO_ROOT
-from orchestrator.builder.fmi_binary import (HERE, LIBRARY, SOURCES, install_binary, library_source_hash,
-                                     source_hash)
+from tests.support.elf_versions import glibc_floor, required_versions
+from orchestrator.builder.fmi_binary import (HERE, LIBRARY, LOCK_LIBRARY, SOURCES, install_binary,
+                                             library_source_hash, source_hash)
 
 SOURCE_NAMES = [path.name for path in SOURCES]
 
@@ -58,6 +59,28 @@ def test_adding_removing_or_renaming_a_source_changes_the_hash(tmp_path):
 def test_the_built_library_records_the_hash_of_the_sources_in_the_checkout():
     assert LIBRARY.is_file(), "make builds the library before the tests"
     assert library_source_hash(LIBRARY) == source_hash()
+    assert library_source_hash(LOCK_LIBRARY) == source_hash()
+
+
+@pytest.mark.parametrize("library", [LIBRARY, LOCK_LIBRARY], ids=["library", "lock_library"])
+def test_the_libraries_load_on_glibc_2_17(library):
+    """The newest symbol version the libraries need is at most GLIBC_2.17 (RHEL 7, Debian 8,
+    Ubuntu 14.04 and every later release), whatever glibc built them; what they need besides
+    libc is only its old companions and the lock library."""
+    print(f"{library.name}: {sorted(required_versions(library).items())}")
+    assert glibc_floor(library) <= (2, 17)
+    assert set(required_versions(library)) <= {"libc.so.6", "libdl.so.2", "libpthread.so.0"}
+
+
+def test_a_stale_lock_library_is_refused(tmp_path):
+    """The lock library beside the main one is checked too: both come from one checkout."""
+    shutil.copy(LIBRARY, tmp_path / LIBRARY.name)
+    data = LOCK_LIBRARY.read_bytes()
+    (tmp_path / LOCK_LIBRARY.name).write_bytes(
+        data.replace(library_source_hash(LOCK_LIBRARY).encode(), b"1" * 64))
+    with pytest.raises(BuildError, match=rf"{LOCK_LIBRARY.name} was compiled from other C sources"):
+        install_binary(tmp_path / "never_read.fmu", "pkg", "Model", "Model",
+                       library=tmp_path / LIBRARY.name)
 
 
 def test_a_library_compiled_from_other_sources_is_refused(tmp_path):
@@ -88,5 +111,11 @@ def test_make_rebuilds_the_library_when_any_source_changes(name):
     assert completed.returncode == 0, completed.stderr
     compile_lines = [line for line in completed.stdout.splitlines() if f"-o {target}" in line]
     assert compile_lines, completed.stdout
+    lock_source = HERE / "process_lock.c"  # its own library, which the main one links to
     assert all(str(path.relative_to(REPO_ROOT)) in compile_lines[0]
-               for path in SOURCES if path.suffix == ".c")
+               for path in SOURCES if path.suffix == ".c" and path != lock_source)
+    assert str(lock_source.relative_to(REPO_ROOT)) not in compile_lines[0]
+    if name == lock_source.name:
+        lock = LOCK_LIBRARY.relative_to(REPO_ROOT)
+        assert any(f"-o {lock}" in line and str(lock_source.relative_to(REPO_ROOT)) in line
+                   for line in completed.stdout.splitlines()), completed.stdout

@@ -1,4 +1,4 @@
-"""Fixtures of the FMI binary tests (test_fmi_binary_*.py), built once per test session."""
+"""Fixtures of the FMI binary tests (this folder), built once per test session."""
 
 import shutil
 import subprocess
@@ -21,7 +21,7 @@ def c_host(tmp_path_factory):
         pytest.skip("gcc is not installed: the C host cannot be compiled")
     binary = tmp_path_factory.mktemp("c_host") / "fmi_host"
     subprocess.run([compiler, "-std=c11", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}", "-o",
-                    str(binary), str(C_HOST_SOURCE), "-ldl"], check=True)
+                    str(binary), str(C_HOST_SOURCE), "-ldl", "-pthread"], check=True)
     return binary
 
 
@@ -83,10 +83,40 @@ def sanitized(tmp_path_factory):
     host = folder / "fmi_host_sanitized"
     subprocess.run([compiler, "-std=c11", "-O1", "-g", "-fno-omit-frame-pointer",
                     "-fsanitize=address,undefined", "-Wall", "-Werror", f"-I{fmi_headers()}",
-                    "-o", str(host), str(C_HOST_SOURCE), "-ldl"], check=True)
+                    "-o", str(host), str(C_HOST_SOURCE), "-ldl", "-pthread"], check=True)
     suppressions = folder / "lsan_suppressions.txt"
     suppressions.write_text(LEAK_SUPPRESSIONS)
     runtime = " ".join(subprocess.run([compiler, f"-print-file-name={name}"], check=True,
                                       capture_output=True, text=True).stdout.strip()
                        for name in ("libasan.so", "libubsan.so"))
     return host, library, suppressions, runtime
+
+
+@pytest.fixture(scope="session")
+def thread_sanitized(tmp_path_factory):
+    """The library and the C host built with -fsanitize=thread (test only): (host, folder holding
+    the library and the lock library). Skipped, saying why, where gcc cannot link ThreadSanitizer."""
+    from orchestrator.builder.fmi_binary import LOCK_LIBRARY, SOURCES
+
+    compiler = shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("gcc is not installed: no ThreadSanitizer build")
+    folder = tmp_path_factory.mktemp("tsan")
+    flags = ["-std=c11", "-O1", "-g", "-fsanitize=thread", f"-I{fmi_headers()}",
+             '-DSONOTRACK_SOURCE_SHA256="tsan"']
+    host = folder / "fmi_host_tsan"
+    trial = subprocess.run([compiler, *flags, "-o", str(host), str(C_HOST_SOURCE), "-ldl",
+                            "-pthread"], capture_output=True, text=True)
+    if trial.returncode != 0:
+        pytest.skip(f"gcc cannot link ThreadSanitizer here: {trial.stderr.strip()[-300:]}")
+    lock = folder / LOCK_LIBRARY.name
+    sources = [str(p) for p in SOURCES if p.suffix == ".c"]
+    lock_source = [s for s in sources if s.endswith("process_lock.c")]
+    subprocess.run([compiler, *flags, "-fPIC", "-shared", "-fvisibility=hidden",
+                    f"-Wl,-soname,{lock.name}", "-o", str(lock), *lock_source, "-lpthread"],
+                   check=True)
+    subprocess.run([compiler, *flags, "-fPIC", "-shared", "-fvisibility=hidden", "-o",
+                    str(folder / "sonotrack_fmi2_tsan.so"),
+                    *[s for s in sources if s not in lock_source], f"-L{folder}",
+                    f"-l:{lock.name}", "-Wl,-rpath,$ORIGIN", "-ldl", "-lpthread"], check=True)
+    return host, folder
