@@ -297,10 +297,17 @@ def check_paper_gain_box(box, req):
                   f"{b['kd_max']:g}] all stable with kp edge / kp >= {req['min_edge_ratio']:g}",
                   f"{box['unstable']} of {box['count']} points unstable; smallest kp edge / kp "
                   f"{box['min_edge_ratio']:.2f} at ({worst['kp']:.3g}, {worst['kd']:.3g}); "
-                  f"read with the paper's signs on e = r - y, max|z| = "
-                  f"{box['literal_signs_spectral_radius']:.3f}", passed,
+                  + _literal_signs(box['literal_signs_spectral_radius']), passed,
                   {k: box[k] for k in ("box", "count", "unstable", "min_edge_ratio",
                                        "literal_signs_spectral_radius")})
+
+
+def _literal_signs(radius):
+    """The paper's printed signs read literally: why the box is judged with them mapped."""
+    verdict = ("unstable: positive feedback, which is why the box is judged with the signs "
+               "mapped (docs/errata.md)" if radius > 1 else "stable even so")
+    return (f"read with the paper's printed (negative) signs on e = r - y, max|z| = "
+            f"{radius:.3f}: {verdict}")
 
 
 def check_routh_gives_paper_bounds(finding, settings, req):

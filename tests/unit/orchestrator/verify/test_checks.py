@@ -330,3 +330,12 @@ def test_unknown_requirement_severity_is_refused(tmp_path):
     with pytest.raises(Exception, match="severity"):
         load_requirements(path)
 
+
+
+@pytest.mark.parametrize("radius, says", [(1.093, "unstable: positive feedback"),
+                                          (0.97, "stable even so")], ids=["above", "below"])
+def test_the_literal_sign_reading_says_why_it_does_not_fail_the_box(radius, says):
+    from orchestrator.verify.checks import _literal_signs
+
+    text = _literal_signs(radius)
+    assert f"max|z| = {radius:.3f}: {says}" in text
