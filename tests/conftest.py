@@ -55,3 +55,20 @@ def keep_fmu_binaries_loaded():
     _FMU.freeLibrary = lambda self: None
     yield
     _FMU.freeLibrary = original
+
+
+@pytest.fixture(scope="session")
+def c_host(tmp_path_factory):
+    """The minimal C host of tests/support/fmi_host.c, compiled with gcc once per session."""
+    import shutil
+    import subprocess
+
+    from tests.support.fmi_binary import C_HOST_SOURCE, fmi_headers
+
+    compiler = shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("gcc is not installed: the C host cannot be compiled")
+    binary = tmp_path_factory.mktemp("c_host") / "fmi_host"
+    subprocess.run([compiler, "-std=c11", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}", "-o",
+                    str(binary), str(C_HOST_SOURCE), "-ldl", "-pthread"], check=True)
+    return binary

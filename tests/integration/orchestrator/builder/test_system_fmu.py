@@ -8,8 +8,6 @@ is expected to be equal bit for bit).
 """
 
 import json
-import shutil
-import subprocess
 
 import fmpy
 import numpy as np
@@ -18,7 +16,7 @@ import pytest
 from orchestrator.builder.fmus import REPO_ROOT
 from orchestrator.scenario import load_scenario
 
-from tests.support.fmi_binary import C_HOST_SOURCE, Host, fmi_headers, run_host
+from tests.support.fmi_binary import Host, run_host
 from tests.support.system_fmu import (STEP, c_host_plan, c_host_rows, ecos_run, fmpy_run,
                                       fmu_name, largest_difference, libcosim_run, reference)
 
@@ -105,18 +103,6 @@ def test_ecos_command_line_runs_it_to_its_csv_resolution(ecos_ready, system_fmu,
     for name in ("plant_x", "plant_y", "source_x", "localizer_bearing", "distance_to_source"):
         other = np.asarray(theirs[f"instance.{name}"], dtype=float)
         assert np.max(np.abs(other - default_run[name][:rows])) <= 1e-6, name
-
-
-@pytest.fixture(scope="module")
-def c_host(tmp_path_factory):
-    """The C host of tests/support/fmi_host.c, compiled as the FMI binary tests compile it."""
-    compiler = shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("gcc is not installed: the C host cannot be compiled")
-    binary = tmp_path_factory.mktemp("c_host") / "fmi_host"
-    subprocess.run([compiler, "-std=c11", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}", "-o",
-                    str(binary), str(C_HOST_SOURCE), "-ldl", "-pthread"], check=True)
-    return binary
 
 
 def test_c_host_runs_it_like_sonotrack_run(c_host, system_fmu, default_run, real_outputs,

@@ -139,7 +139,7 @@ def test_missing_system_file_and_bad_toml(tmp_path):
 
 def test_shipped_scenarios():
     loaded = {path.stem: load_scenario(path) for path in sorted(SCENARIOS.glob("*.toml"))}
-    assert sorted(loaded) == ["dynamic_case2", "s_curve", "static_case1", "straight"]
+    assert sorted(loaded) == ["dynamic_case2", "room", "s_curve", "static_case1", "straight"]
     for scenario in loaded.values():
         assert scenario.system == SSD.resolve()
         assert scenario.base_step == 0.01
@@ -148,6 +148,8 @@ def test_shipped_scenarios():
                                                  "plant")] == [1, 1, 2, 2, 2, 2]
     assert loaded["s_curve"].parameters["source.path"] == "s_curve"
     assert loaded["straight"].parameters["source.path"] == "straight"
+    # only the room scenario hears a room; the others stay in free field
+    assert [name for name, s in loaded.items() if s.parameters.get("localizer.room")] == ["room"]
     # Case 1: 2 m at 45 deg right of a robot at the origin facing +y.
     case1 = loaded["static_case1"].parameters
     assert (case1["source.x0"], case1["source.y0"]) == pytest.approx((2 * 0.5**0.5,) * 2,

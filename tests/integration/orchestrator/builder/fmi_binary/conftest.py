@@ -14,18 +14,6 @@ from tests.support.fmi_binary import (C_HOST_SOURCE, LEAK_SUPPRESSIONS, NAMES, P
 
 
 @pytest.fixture(scope="session")
-def c_host(tmp_path_factory):
-    """The minimal C host (fmi_host.c) compiled with gcc."""
-    compiler = shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("gcc is not installed: the C host cannot be compiled")
-    binary = tmp_path_factory.mktemp("c_host") / "fmi_host"
-    subprocess.run([compiler, "-std=c11", "-O1", "-Wall", "-Werror", f"-I{fmi_headers()}", "-o",
-                    str(binary), str(C_HOST_SOURCE), "-ldl", "-pthread"], check=True)
-    return binary
-
-
-@pytest.fixture(scope="session")
 def extracted(fmu_paths, tmp_path_factory):
     """Model name -> (unzip folder, model description), each FMU extracted once."""
     import fmpy
