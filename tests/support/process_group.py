@@ -19,8 +19,8 @@ import signal
 import time
 from pathlib import Path
 
-__all__ = ["PAUSE_SITE", "group_members", "held_locks", "kill_group", "pause_env",
-           "read_to_eof", "wait_for_stopped", "wait_until_gone"]
+__all__ = ["PAUSE_SITE", "end_command", "group_members", "held_locks", "kill_group",
+           "pause_env", "read_to_eof", "wait_for_stopped", "wait_until_gone"]
 
 PAUSE_SITE = Path(__file__).resolve().parent / "pause_site"
 
@@ -130,3 +130,11 @@ def kill_group(pgid):
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
+
+
+def end_command(process):
+    """Clean up after a test: kill what is left of ``process``'s group, then reap it."""
+    kill_group(process.pid)
+    if process.poll() is None:
+        process.kill()
+    process.wait(timeout=30)

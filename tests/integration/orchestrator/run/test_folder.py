@@ -19,7 +19,7 @@ import pytest
 from orchestrator.run.folder import read_summary
 from orchestrator.run.plots import PLOT_FILES
 from orchestrator.run.results import count_rows, read_results
-from tests.support.process_group import (kill_group, pause_env, read_to_eof, wait_for_stopped,
+from tests.support.process_group import (end_command, pause_env, read_to_eof, wait_for_stopped,
                                          wait_until_gone)
 
 pytestmark = pytest.mark.integration
@@ -242,10 +242,7 @@ def test_a_killed_run_reads_back_as_abandoned(fmu_dir, tmp_path):
         assert read_to_eof(process.stdout, 1.0) is not None
         assert read_to_eof(process.stderr, 1.0) is not None
     finally:
-        kill_group(process.pid)
-        if process.poll() is None:
-            process.kill()
-        process.wait(timeout=30)
+        end_command(process)
     assert json.loads((out / "summary.json").read_text())["status"] == "running"
     summary = read_summary(out)
     assert summary["status"] == "abandoned"

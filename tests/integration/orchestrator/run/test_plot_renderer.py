@@ -11,7 +11,7 @@ import pytest
 
 from orchestrator.builder.fmus import REPO_ROOT
 from orchestrator.run.folder import read_summary
-from tests.support.process_group import (group_members, kill_group, pause_env, read_to_eof,
+from tests.support.process_group import (end_command, group_members, pause_env, read_to_eof,
                                          wait_for_stopped, wait_until_gone)
 from tests.support.sweep_command import short_scenario
 
@@ -55,10 +55,7 @@ def test_a_run_killed_mid_figure_leaves_no_renderer_and_reads_plots_abandoned(fm
         assert read_to_eof(process.stdout, 1.0) is not None
         assert read_to_eof(process.stderr, 1.0) is not None
     finally:
-        kill_group(process.pid)
-        if process.poll() is None:
-            process.kill()
-        process.wait(timeout=30)
+        end_command(process)
     summary = read_summary(out)
     assert summary["status"] == "ok"   # results.csv and the figures of the run are complete
     assert summary["plots"] == "abandoned"

@@ -14,7 +14,7 @@ from orchestrator.builder.fmus import REPO_ROOT
 from orchestrator.run.folder import read_summary
 from orchestrator.scenario import load_scenario
 from orchestrator.sweep import sweep
-from tests.support.process_group import (group_members, kill_group, pause_env,
+from tests.support.process_group import (end_command, group_members, pause_env,
                                          wait_for_stopped, wait_until_gone)
 from tests.support.sweep_command import start_sweep
 
@@ -83,7 +83,4 @@ def test_a_killed_client_leaves_the_cluster_which_ends_with_its_owner(fmu_dir, t
     finally:
         for process in (client, owner):
             if process is not None:
-                kill_group(process.pid)
-                if process.poll() is None:
-                    process.kill()
-                process.wait(timeout=30)
+                end_command(process)

@@ -22,7 +22,7 @@ from orchestrator.builder.fmus import REPO_ROOT
 from orchestrator.run.folder import read_summary
 from orchestrator.scenario import load_scenario
 from orchestrator.sweep import sweep
-from tests.support.process_group import (group_members, held_locks, kill_group, read_to_eof,
+from tests.support.process_group import (end_command, group_members, held_locks, read_to_eof,
                                          wait_for_stopped, wait_until_gone)
 from tests.support.sweep_command import start_sweep
 
@@ -80,10 +80,7 @@ def test_a_killed_sweep_leaves_nothing_running_and_resumes(fmu_dir, tmp_path, mo
         assert list((cache / "fmu-locks").glob("*.lock")), "the sweep took no cache lock"
         assert held_locks(cache) == []
     finally:
-        kill_group(process.pid)
-        if process.poll() is None:
-            process.kill()
-        process.wait(timeout=30)
+        end_command(process)
 
     statuses = _statuses_on_disk(out)
     finished = [key for key, status in statuses.items() if status == "ok"]
@@ -147,7 +144,4 @@ def test_workers_of_an_engine_started_off_the_main_thread_die_by_the_lifeline(tm
         elapsed, left = wait_until_gone(process.pid, GONE_WITHIN_S)
         assert left == [], f"workers still running {elapsed:.1f} s after the kill: {left}"
     finally:
-        kill_group(process.pid)
-        if process.poll() is None:
-            process.kill()
-        process.wait(timeout=30)
+        end_command(process)
