@@ -86,6 +86,10 @@ KINDS = {
                               0.1, WHEELS, region=True),
     "supply_sag": FaultKind("RobotPlant", "supply voltage while active, V", 0.0, 100.0, 6.0,
                             WHEELS),
+    # 0.19 N m: 20 % of RobotPlant's stall torque at the wheel at 11.1 V (docs/faults.md)
+    "load_torque": FaultKind("RobotPlant", "torque against the wheel's forward rotation while "
+                             "active, N m at the wheel (negative: pushing forward)", -10.0, 10.0,
+                             0.19, WHEELS),
 }
 
 _FIELDS = ("kind", "target", "start", "end", "magnitude", "channel", "region")

@@ -1,10 +1,12 @@
-"""Plant faults: a sagging supply, encoders that skip or freeze, a low-friction floor patch.
+"""Plant faults: a sagging supply, encoders that skip or freeze, a low-friction floor patch, a load.
 
 :class:`PlantFaults` answers, for the time at the start of a communication step, what each
 wheel gets: its supply voltage (``supply_sag``: the battery sags to ``magnitude`` volts), the
 fraction of its encoder counts that reach the MCU (``encoder_skip``: ``1 - magnitude``;
 ``encoder_freeze``: none) and the friction under its contact point (``low_friction``: ``mu =
-magnitude`` while the contact point lies in the fault's region). Values are held over the step
+magnitude`` while the contact point lies in the fault's region) and the load torque against its
+forward rotation (``load_torque``: ``magnitude`` N m at the wheel, a slope, a carpet edge or a
+push felt through the wheel; the sum of the active ones). Values are held over the step
 (20 ms: 6 mm of travel at 0.3 m/s, far below a patch's size).
 """
 
@@ -57,3 +59,8 @@ class PlantFaults:
             if fault.hits(wheel) and fault.covers(x, y):
                 mu = min(mu, fault.magnitude)
         return mu
+
+    def load_torque(self, time, wheel):
+        """Load torque against ``wheel``'s forward rotation at ``time`` [N m at the wheel]."""
+        return sum(fault.magnitude for fault in self.schedule.active(time, "load_torque")
+                   if fault.hits(wheel))

@@ -72,6 +72,11 @@ def integrate_span(core, voltage_left, voltage_right, span_ns, count):
     emf = core.emf_per_wheel_speed
     torque_per_amp = core.drive_torque_per_amp
     friction = core.drive_friction
+    # Coulomb friction (eta N T_c tanh(N w / w_c) at the wheel) and the loads: explicit
+    # torques, the Coulomb slope joins W so that stiction at rest stays stable
+    coulomb = core.coulomb_wheel_torque
+    coulomb_rate = core.coulomb_shaft_per_wheel
+    load_left, load_right = core.load_torque_left, core.load_torque_right
     floor = prm.slip_speed_floor
     stiffness = core.tyre_stiffness          # c N: force per unit slip at small slip
     # mu N per wheel: a low-friction patch (a fault) can lower one wheel's
@@ -198,8 +203,17 @@ def integrate_span(core, voltage_left, voltage_right, span_ns, count):
                 lat_stiff += (tangent * (1.0 - share) + secant * share) * inv_scale
 
             # ---- factor W ----
-            inv_den_left = 1.0 / (wheel_base + g_radius2 * stiff_left)
-            inv_den_right = 1.0 / (wheel_base + g_radius2 * stiff_right)
+            extra_left, extra_right = load_left, load_right
+            base_left = base_right = wheel_base
+            if coulomb:
+                t = tanh(coulomb_rate * w_left)
+                extra_left += coulomb * t
+                base_left += g * coulomb * coulomb_rate * (1.0 - t * t)
+                t = tanh(coulomb_rate * w_right)
+                extra_right += coulomb * t
+                base_right += g * coulomb * coulomb_rate * (1.0 - t * t)
+            inv_den_left = 1.0 / (base_left + g_radius2 * stiff_left)
+            inv_den_right = 1.0 / (base_right + g_radius2 * stiff_right)
             stiff_radius_left = stiff_left * radius
             stiff_radius_right = stiff_right * radius
             q_left = g * stiff_radius_left * inv_den_left
@@ -217,9 +231,9 @@ def integrate_span(core, voltage_left, voltage_right, span_ns, count):
             a_left = (voltage_left - resistance * i_left - emf * w_left) * inv_electric
             a_right = (voltage_right - resistance * i_right - emf * w_right) * inv_electric
             p_left = (torque_per_amp * i_left - friction * w_left - radius * force_left
-                      + g_torque * a_left) * inv_den_left
+                      - extra_left + g_torque * a_left) * inv_den_left
             p_right = (torque_per_amp * i_right - friction * w_right - radius * force_right
-                       + g_torque * a_right) * inv_den_right
+                       - extra_right + g_torque * a_right) * inv_den_right
             alpha_left = stiff_radius_left * p_left
             alpha_right = stiff_radius_right * p_right
             rhs_speed = (force_left + force_right + mass * wz * v_lat
@@ -286,14 +300,20 @@ def integrate_span(core, voltage_left, voltage_right, span_ns, count):
                 lat_right = secant * slip_lat
 
             # ---- solve W k2 = f(z + h k1) - 2 M k1 ----
+            extra_left, extra_right = load_left, load_right
+            if coulomb:
+                extra_left += coulomb * tanh(coulomb_rate * s_w_left)
+                extra_right += coulomb * tanh(coulomb_rate * s_w_right)
             a_left = (voltage_left - resistance * s_i_left - emf * s_w_left
                       - two_inductance * k1_i_left) * inv_electric
             a_right = (voltage_right - resistance * s_i_right - emf * s_w_right
                        - two_inductance * k1_i_right) * inv_electric
             p_left = (torque_per_amp * s_i_left - friction * s_w_left - radius * force_left
-                      - two_wheel_inertia * k1_w_left + g_torque * a_left) * inv_den_left
+                      - extra_left - two_wheel_inertia * k1_w_left
+                      + g_torque * a_left) * inv_den_left
             p_right = (torque_per_amp * s_i_right - friction * s_w_right - radius * force_right
-                       - two_wheel_inertia * k1_w_right + g_torque * a_right) * inv_den_right
+                       - extra_right - two_wheel_inertia * k1_w_right
+                       + g_torque * a_right) * inv_den_right
             alpha_left = stiff_radius_left * p_left
             alpha_right = stiff_radius_right * p_right
             rhs_speed = (force_left + force_right + mass * s_wz * s_lat - two_mass * k1_v

@@ -70,6 +70,10 @@ class PlantParameters:
         Largest linearisation defect of the tyre forces on one substep, expressed as the body
         speed change it would cause (``h |defect| / mass``) [m/s]; a substep that exceeds it
         is redone in up to 16 equal pieces.
+    coulomb_friction : float
+        Coulomb (dry) friction torque at the motor shaft [N m], against the shaft's rotation,
+        regularised as ``T_c tanh(N w / COULOMB_SPEED)`` (:mod:`.dynamics`); 0 (default): none,
+        the no-load current is carried by ``motor_viscous_friction`` alone (docs/plant.md).
     """
 
     mass: float = 4.5
@@ -97,6 +101,7 @@ class PlantParameters:
     heading0: float = math.pi / 2
     max_substep: float = 2.0e-3
     substep_tolerance: float = 1.0e-4
+    coulomb_friction: float = 0.0
 
     def validate(self):
         """Raise :class:`ParameterError` listing every invalid parameter at once."""
@@ -115,6 +120,8 @@ class PlantParameters:
             if self.motor_viscous_friction < 0.0:
                 problems.append(f"motor_viscous_friction = {self.motor_viscous_friction!r} "
                                 "must be >= 0")
+            if self.coulomb_friction < 0.0:
+                problems.append(f"coulomb_friction = {self.coulomb_friction!r} must be >= 0")
             if not 0.0 < self.gear_efficiency <= 1.0:
                 problems.append(f"gear_efficiency = {self.gear_efficiency!r} must be in (0, 1]")
             if int(self.encoder_ppr) != self.encoder_ppr or self.encoder_ppr < 1:

@@ -10,6 +10,7 @@ import math
 
 from ..common.errors import InputError
 from ..common.faults import parse_schedule
+from .dynamics import COULOMB_SPEED
 from .encoder import WheelEncoder
 from .faults import PlantFaults
 from .integrator import _NS, integrate_span
@@ -83,6 +84,12 @@ class RobotPlantCore:
         self.emf_per_wheel_speed = p.back_emf_constant * p.gear_ratio
         self.wheel_total_inertia = (p.wheel_inertia
                                     + p.gear_efficiency * p.gear_ratio ** 2 * p.rotor_inertia)
+        # Coulomb friction at the wheel: eta N T_c tanh(N w / COULOMB_SPEED)
+        self.coulomb_wheel_torque = p.gear_efficiency * p.gear_ratio * p.coulomb_friction
+        self.coulomb_shaft_per_wheel = p.gear_ratio / COULOMB_SPEED
+        # load torque against each wheel's forward rotation (the load_torque fault) [N m]
+        self.load_torque_left = 0.0
+        self.load_torque_right = 0.0
         self.current_left = 0.0
         self.current_right = 0.0
         self.wheel_omega_left = 0.0
@@ -221,6 +228,8 @@ class RobotPlantCore:
             time, "left", self.x + half * left_x, self.y + half * left_y, p.mu)
         self.tyre_peak_right = self.wheel_load * faults.friction(
             time, "right", self.x - half * left_x, self.y - half * left_y, p.mu)
+        self.load_torque_left = faults.load_torque(time, "left")
+        self.load_torque_right = faults.load_torque(time, "right")
         return (faults.supply(time, "left", p.v_supply), faults.supply(time, "right", p.v_supply),
                 faults.encoder_keep(time, "left"), faults.encoder_keep(time, "right"))
 
