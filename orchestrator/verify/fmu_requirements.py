@@ -5,9 +5,9 @@ so the wheel is the grid's) and two WheelController FMUs of one design, connecte
 system (``voltage`` -> ``voltage_left/right``, ``wheel_speed_left/right`` -> ``v_meas``) and
 stepped by :class:`orchestrator.run.master.Master`, Gauss-Seidel, controllers first, at the
 speed window; the reference is written to both controllers' ``v_ref`` before each step.
-Every experiment of :data:`.wheel_experiments.FMU_REQUIREMENTS` runs on each judged cell
-(RobotPlant has no load-torque input, so the load step is the discrete-time loop's alone).
-The FMU instances are reused between runs (``fmi2Reset``).
+Every experiment of :data:`.wheel_experiments.FMU_REQUIREMENTS` runs on each judged cell;
+the load step is RobotPlant's own ``load_torque`` fault (its ``fault_schedule`` parameter,
+docs/faults.md) on both wheels. The FMU instances are reused between runs (``fmi2Reset``).
 """
 
 import math
@@ -16,6 +16,7 @@ import tempfile
 import numpy as np
 
 from components.common.errors import SimulationError
+from components.common.faults import Fault, encode_schedule
 
 from . import wheel_experiments as X
 
@@ -42,8 +43,11 @@ class FmuLoop:
         self.controllers = {side: FmuInstance(controller_path, f"verify_requirements_{side}",
                                               reusable=True) for side in ("left", "right")}
 
-    def run(self, controller_parameters, plant_parameters, reference, duration):
+    def run(self, controller_parameters, plant_parameters, reference, duration,
+            fault_schedule=""):
         """One run from rest; the plant's outputs after every step.
+
+        ``fault_schedule`` is RobotPlant's (a JSON list, docs/faults.md; "" none).
 
         Returns
         -------
@@ -57,6 +61,7 @@ class FmuLoop:
         steps = int(round(duration / period))
         values = X.plant_values(plant_parameters)
         plant_values = {k: v for k, v in values.items() if k in self.plant.variables}
+        plant_values["fault_schedule"] = fault_schedule
         specs = [InstanceSpec(side, handle, parameters={
                      k: v for k, v in controller_parameters.items() if k in handle.variables})
                  for side, handle in self.controllers.items()]
@@ -105,6 +110,27 @@ def _settling(loop, settings, plant, cell, req, grid):
     value = X.settling_after(run["t"], run["rim_left"], speed, req["band_fraction"] * speed,
                              start)
     return {"value": value, "passed": value <= req["max_settling_time_s"]}
+
+
+def _load_recovery(loop, settings, plant, cell, req, grid):
+    """The load step as RobotPlant's load_torque fault: the same torque the loop's
+    :func:`.requirement_runs.load_recovery` applies as a rim force, on both wheels."""
+    from .loop_model import linear_wheel_model
+    from .sampled_wheel import stall_force
+
+    parameters = X.plant_variant_parameters(*cell, base=plant, encoder_ppr=FINE_ENCODER_PPR)
+    force = req["load_fraction_of_stall"] * stall_force(linear_wheel_model(plant).scaled(*cell),
+                                                        plant.v_supply)
+    speed, start = req["speed_m_s"], req["load_time_s"]
+    schedule = encode_schedule([Fault("load_torque", float(start),
+                                      magnitude=force * parameters.wheel_radius,
+                                      channel="both")])
+    run = loop.run(settings, parameters, X.step_reference(speed, plant.speed_window),
+                   req["run_time_s"], fault_schedule=schedule)
+    value = X.settling_after(run["t"], run["rim_left"], speed, req["band_fraction"] * speed,
+                             start)
+    return {"value": value, "passed": value <= req["max_recovery_time_s"],
+            "load_torque_n_m": force * parameters.wheel_radius}
 
 
 def _ramp_lag(loop, settings, plant, cell, req, grid):
@@ -160,7 +186,8 @@ def _slip_chatter(loop, settings, plant, cell, req, grid):
             "at_friction": at, "per_friction": per_friction}
 
 
-_RUNS = {"off_nominal_settling": _settling, "ramp_lag": _ramp_lag, "no_creep": _creep,
+_RUNS = {"off_nominal_settling": _settling, "load_step_recovery": _load_recovery,
+         "ramp_lag": _ramp_lag, "no_creep": _creep,
          "no_limit_cycle": _limit_cycle, "no_slip_chatter": _slip_chatter}
 
 

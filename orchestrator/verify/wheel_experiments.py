@@ -25,9 +25,8 @@ __all__ = ["REQUIREMENTS", "FMU_REQUIREMENTS", "plant_variant_parameters", "step
 # Table names in the requirements file, in the report's order.
 REQUIREMENTS = ("off_nominal_settling", "load_step_recovery", "ramp_lag", "no_creep",
                 "no_limit_cycle", "no_slip_chatter")
-# RobotPlant has no load-torque input: the load step runs on the discrete-time loop only.
-FMU_REQUIREMENTS = ("off_nominal_settling", "ramp_lag", "no_creep", "no_limit_cycle",
-                    "no_slip_chatter")
+# All six through the FMUs too (the load step as RobotPlant's load_torque fault).
+FMU_REQUIREMENTS = REQUIREMENTS
 
 
 def plant_variant_parameters(gain_factor, time_constant_factor, base=None, **overrides):

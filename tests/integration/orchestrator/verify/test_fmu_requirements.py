@@ -47,6 +47,20 @@ def test_default_form_meets_the_requirements_with_robotplant_in_our_master(loop,
     assert result["passed"], result
 
 
+@pytest.mark.parametrize("cell", [(1.0, 1.0), (2.0, 2.0)], ids=["nominal", "strong-heavy"])
+def test_load_step_runs_through_robotplant_as_its_load_torque_fault(loop, cell):
+    result = _run(loop, "load_step_recovery", DEFAULT, cell)
+    assert result["passed"], result
+    # 20 % of the wheel's own stall torque at 11.1 V: eta N Kt G V / R at the wheel
+    p = PlantParameters()
+    stall = p.gear_efficiency * p.gear_ratio * p.torque_constant * cell[0] * p.v_supply \
+        / p.motor_resistance
+    assert result["load_torque_n_m"] == pytest.approx(0.2 * stall, rel=1e-9)
+    # the load was felt: recovering takes time (0 would mean no load reached the wheel)
+    assert result["value"] > 0.2
+    assert not _run(loop, "load_step_recovery", PAPER, cell)["passed"]
+
+
 def test_default_form_does_not_chatter_at_friction_02_and_an_undamped_pd_does(loop):
     assert _run(loop, "no_slip_chatter", DEFAULT, (1.0, 1.0), frictions=[0.2])["value"] == 0
     undamped = dict(DEFAULT, mode="pd", pd_kp=14.0, pd_kd=0.0)
