@@ -7,8 +7,11 @@ overshoot on paper Case 1's ramp (RobotPlant core, :mod:`orchestrator.verify.cas
 spread of the scheduled kp and kd in paper Cases 1 and 2 (``scenarios/static_case1.toml``,
 ``scenarios/dynamic_case2.toml``, the whole system through the FMUs). Then the measurement
 behind the requirements' judged range (``family``: the best any PD/PID with feedforward can do
-over the issue's whole grid, and the two corners that pull the gains apart), and the four
-shipped scenarios' summary figures in both forms (``scenarios``).
+over the issue's whole grid, and the two corners that pull the gains apart), the physical
+bound on settling at every wheel of that grid (``settling_bound``: the fastest any controller
+can settle with the supply voltage, beside the default form as shipped and the default form
+given the wheel's own two constants), and the four shipped scenarios' summary figures in both
+forms (``scenarios``).
 
 Run: ``.venv/bin/python benchmarks/wheel_loop.py`` (``--quick`` for a short check: one
 scenario, a small family search) -> ``benchmarks/results/wheel_loop.json``.
@@ -182,6 +185,37 @@ def family(req, quick):
     return {"linear": linear, "corners": corners}
 
 
+def settling_bound(req):
+    """Per grid wheel: the minimum 2 % settling time of any controller (saturated supply,
+    :mod:`orchestrator.verify.settling_bound`), continuous and on the 20 ms samples; the
+    default form's settling as shipped and with ``volts_per_speed`` and
+    ``acceleration_feedforward`` set to that wheel's own DC gain and time constant."""
+    from orchestrator.verify.loop_model import linear_wheel_model
+    from orchestrator.verify.settling_bound import minimum_settling_time
+
+    plant, grid = PlantParameters(), req["off_nominal_grid"]
+    table = req["off_nominal_settling"]
+    speed, band = table["step_m_s"], table["band_fraction"]
+    rows = []
+    for g in grid["gain_factors"]:
+        for t in grid["time_constant_factors"]:
+            cell = (float(g), float(t))
+            model = linear_wheel_model(plant).scaled(*cell)
+            own = dict(DEFAULTS, volts_per_speed=1.0 / model.dc_gain,
+                       acceleration_feedforward=model.time_constants[1])
+            rows.append({
+                "gain_factor": cell[0], "time_constant_factor": cell[1],
+                "minimum_s": minimum_settling_time(model, speed, band, plant.v_supply),
+                "minimum_sampled_s": minimum_settling_time(model, speed, band, plant.v_supply,
+                                                           plant.speed_window),
+                "default_form_s": _finite(run_model_experiment(
+                    "off_nominal_settling", dict(DEFAULTS), plant, cell, req, grid)["value"]),
+                "default_form_own_constants_s": _finite(run_model_experiment(
+                    "off_nominal_settling", own, plant, cell, req, grid)["value"])})
+    return {"rows": rows, "largest_minimum_s": max(r["minimum_sampled_s"] for r in rows),
+            "target_s": table["max_settling_time_s"]}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true",
@@ -201,6 +235,7 @@ def main(argv=None):
         out["scenarios"] = scenario_summaries(scratch / "fmus", scratch,
                                               SCENARIOS[:1] if args.quick else SCENARIOS)
     out["family"] = family(req, args.quick)
+    out["settling_bound"] = settling_bound(req)
     out["quick"] = bool(args.quick)
     out["wall_time_s"] = time.perf_counter() - started
     _print(out)
@@ -231,6 +266,11 @@ def _print(out):
           f"{s(lin['best_worst_settling_s'])} s (of {lin['searched']} PID gain sets); "
           f"{corners['both_hold']} of "
           f"{len(corners['designs'])} default-form gain sets meet both corners")
+    bound = out["settling_bound"]
+    own = [r["default_form_own_constants_s"] for r in bound["rows"]]
+    print(f"settling bound: any controller needs at most {bound['largest_minimum_s']:.2f} s "
+          f"on the grid (target {bound['target_s']:g} s); the default form with each wheel's "
+          f"own constants {s(min(own))}..{s(max(own))} s")
 
 
 if __name__ == "__main__":
