@@ -21,7 +21,7 @@ import numpy as np
 
 from ..common.faults import IMPULSES_PER_RECORD, MICROPHONES, REFLECTION_COEFFICIENT
 from .synthesis import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE, _delayed_bursts, _quantise,
-                        noise_std, quantisation_step)
+                        noise_std, quantisation_step, skewed_arrivals)
 
 __all__ = ["faulted_records", "apply_record_faults", "channel_fault", "drops_fix", "mirror_in_wall", "CLIP_RUN",
            "CLIP_MIN_STEPS", "DEAD_SPAN_STEPS", "CLICK_DECAY_SAMPLES"]
@@ -66,8 +66,9 @@ def faulted_records(settings, ranges, image_ranges, faults, rng, clean=None):
         The acoustic faults active at this fix (``lost_fixes`` is handled by the caller).
     rng : numpy.random.Generator
     clean : numpy.ndarray, optional
-        Shape (3, n): the noise-free records without the wall (a room's); by default the
-        free field's direct sound from ``ranges``.
+        Shape (3, n): the noise-free records without the wall (a room's, sampled with the
+        settings' ``adc_skews`` already); by default the free field's direct sound from
+        ``ranges``. The wall's image and the free field's sound are sampled with the skews.
 
     Returns
     -------
@@ -81,12 +82,14 @@ def faulted_records(settings, ranges, image_ranges, faults, rng, clean=None):
     start = np.asarray(np.floor((arrivals.min() - s.pre_roll) * s.sample_rate) / s.sample_rate)
     if clean is None:
         gains = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / ranges
-        clean = _delayed_bursts(s.burst, gains, arrivals, start, s.sample_rate, n)
+        clean = _delayed_bursts(s.burst, gains, skewed_arrivals(arrivals, s.adc_skews), start,
+                                s.sample_rate, n)
     if image_ranges is not None:
         image = np.asarray(image_ranges, dtype=float)
         image_gains = REFLECTION_COEFFICIENT * REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / image
-        clean = clean + _delayed_bursts(s.burst, image_gains, image / s.speed_of_sound, start,
-                                        s.sample_rate, n)
+        clean = clean + _delayed_bursts(
+            s.burst, image_gains, skewed_arrivals(image / s.speed_of_sound, s.adc_skews), start,
+            s.sample_rate, n)
     return apply_record_faults(settings, clean, faults, rng)
 
 

@@ -3,6 +3,11 @@
 M1 sits on the robot's left, M2 (the array centre) in the middle, M3 on its right, ``l`` apart;
 the array centre is ``array_offset`` ahead of the robot's reference point along the heading.
 Bearings are counter-clockwise (left) positive, relative to the heading.
+
+A real array is not exactly that: each microphone may sit ``(along, across)`` off its nominal
+place, ``along`` the array line towards the robot's left and ``across`` it forward (the
+``offsets`` of :func:`microphone_positions` and :func:`microphone_ranges`). The sound reaches
+the true positions; the estimators assume the nominal ones.
 """
 
 import math
@@ -13,7 +18,8 @@ __all__ = ["microphone_positions", "microphone_ranges", "source_in_array_frame",
            "robot_polar"]
 
 
-def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_offset=0.0):
+def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_offset=0.0,
+                         offsets=None):
     """Return the world positions of M1, M2, M3.
 
     Parameters
@@ -26,6 +32,9 @@ def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_off
         Distance ``l`` between adjacent microphones [m].
     array_offset : float, optional
         Array centre ahead of the reference point along the heading [m].
+    offsets : sequence of (float, float), optional
+        Per microphone M1, M2, M3: ``(along, across)`` off its nominal place [m], along the
+        array line towards the robot's left and across it forward. Default: none.
 
     Returns
     -------
@@ -35,15 +44,19 @@ def microphone_positions(robot_x, robot_y, robot_heading, mic_spacing, array_off
     forward = np.array([np.cos(robot_heading), np.sin(robot_heading)])
     left = np.array([-forward[1], forward[0]])
     centre = np.array([robot_x, robot_y]) + array_offset * forward
-    return np.stack([centre + mic_spacing * left, centre, centre - mic_spacing * left])
+    nominal = np.stack([centre + mic_spacing * left, centre, centre - mic_spacing * left])
+    if offsets is None:
+        return nominal
+    offsets = np.asarray(offsets, dtype=float)
+    return nominal + offsets[:, :1] * left + offsets[:, 1:] * forward
 
 
 def microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading, mic_spacing,
-                      array_offset=0.0):
+                      array_offset=0.0, offsets=None):
     """Return the ranges from a source to M1, M2, M3 (floats; one geometry).
 
     The numbers of ``np.hypot`` from the source to :func:`microphone_positions`, by the same
-    arithmetic in Python scalars.
+    arithmetic in Python scalars. ``offsets`` as there.
 
     Returns
     -------
@@ -56,9 +69,14 @@ def microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading, mic_s
     centre_x = robot_x + array_offset * cos_h
     centre_y = robot_y + array_offset * sin_h
     left_x, left_y = mic_spacing * -sin_h, mic_spacing * cos_h
-    dx = [source_x - (centre_x + left_x), source_x - centre_x, source_x - (centre_x - left_x)]
-    dy = [source_y - (centre_y + left_y), source_y - centre_y, source_y - (centre_y - left_y)]
-    return np.hypot(dx, dy).tolist()
+    mic_x = [centre_x + left_x, centre_x, centre_x - left_x]
+    mic_y = [centre_y + left_y, centre_y, centre_y - left_y]
+    if offsets is not None:
+        # A zero offset adds zero, which changes no bit of the nominal positions.
+        for mic, (along, across) in enumerate(offsets):
+            mic_x[mic] += along * -sin_h + across * cos_h
+            mic_y[mic] += along * cos_h + across * sin_h
+    return np.hypot([source_x - x for x in mic_x], [source_y - y for y in mic_y]).tolist()
 
 
 def source_in_array_frame(source_x, source_y, robot_x, robot_y, robot_heading, array_offset=0.0):

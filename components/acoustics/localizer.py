@@ -100,7 +100,8 @@ def locate_bursts(settings, estimator, ranges, rng):
     settings : LocalizerSettings
     estimator : PositionEstimator
     ranges : array_like
-        Shape (..., 3): true ranges R1, R2, R3 [m].
+        Shape (..., 3): true ranges R1, R2, R3 [m] (to the microphones where they are: with
+        the settings' ``mic_offsets``); the channels are sampled with its ``adc_skews``.
     rng : numpy.random.Generator
 
     Returns
@@ -111,7 +112,7 @@ def locate_bursts(settings, estimator, ranges, rng):
         settings.burst, ranges, sample_rate=settings.sample_rate,
         speed_of_sound=settings.speed_of_sound, snr_db=settings.snr_db,
         adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
-        n_samples=settings.record_samples, rng=rng)
+        n_samples=settings.record_samples, rng=rng, adc_skews=settings.adc_skews)
     return locate_records(settings, estimator, records)
 
 
@@ -135,7 +136,7 @@ def _locate_one(settings, estimator, ranges, rng):
         settings.burst, ranges, sample_rate=settings.sample_rate,
         speed_of_sound=settings.speed_of_sound, noise_std=settings.noise_std,
         adc_bits=settings.adc_bits, pre_roll=settings.pre_roll,
-        n_samples=settings.record_samples, rng=rng)
+        n_samples=settings.record_samples, rng=rng, adc_skews=settings.adc_skews)
     return _locate_records_one(settings, estimator, records)
 
 
@@ -285,8 +286,10 @@ class LocalizerCore:
         elif range_2 > s.max_range:
             status = FixStatus.OUT_OF_RANGE
         else:
+            # The sound reaches the microphones where they are; the estimator assumes the
+            # nominal array (settings.mic_offsets, docs/acoustics.md).
             ranges = microphone_ranges(source_x, source_y, robot_x, robot_y, robot_heading,
-                                       s.mic_spacing, s.array_offset)
+                                       s.mic_spacing, s.array_offset, s.mic_offsets)
             record_faults = [f for f in active if f.kind != "lost_fixes"]
             if self.acoustics is not None:
                 fixes = _locate_records_one(s, self.estimator, self._room_records(
@@ -327,7 +330,7 @@ class LocalizerCore:
             rise = s.source_height - s.mic_height
             image_ranges = [math.hypot(r, rise) for r in microphone_ranges(
                 image_x, image_y, robot_x, robot_y, robot_heading, s.mic_spacing,
-                s.array_offset)]
+                s.array_offset, s.mic_offsets)]
         return faulted_records(s, ranges, image_ranges, faults, self.rng, clean=clean)
 
     def _faulted_records(self, ranges, faults, source_x, source_y, robot_x, robot_y,
@@ -339,5 +342,5 @@ class LocalizerCore:
         if walls and (source_x - walls[0].magnitude) * (robot_x - walls[0].magnitude) > 0.0:
             image_x, image_y = mirror_in_wall(source_x, source_y, walls[0].magnitude)
             image_ranges = microphone_ranges(image_x, image_y, robot_x, robot_y, robot_heading,
-                                             s.mic_spacing, s.array_offset)
+                                             s.mic_spacing, s.array_offset, s.mic_offsets)
         return faulted_records(s, ranges, image_ranges, faults, self.rng)

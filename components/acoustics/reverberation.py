@@ -110,6 +110,10 @@ class RoomAcoustics:
         self.mic_height = s.mic_height
         self.mic_spacing = s.mic_spacing
         self.array_offset = s.array_offset
+        # The array as built (offsets) and its channels' sampling skews: what the room is heard
+        # with; the estimator keeps the nominal array.
+        self.mic_offsets = s.mic_offsets
+        self.adc_skews = np.array(s.adc_skews) if any(s.adc_skews) else None
         self.burst_period = s.burst_period
         self.burst_duration = s.burst_duration
         self.sample_rate = s.sample_rate
@@ -131,13 +135,25 @@ class RoomAcoustics:
 
     # ----- bodies ------------------------------------------------------------------------------
     def microphones(self, robot_x, robot_y, robot_heading):
-        """Room-frame positions (3, 3) of M1, M2, M3 (rows) for a robot pose."""
+        """Room-frame positions (3, 3) of M1, M2, M3 (rows) for a robot pose, where they are."""
         cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
         centre = (robot_x + self.array_offset * cos_h - self.room.origin[0],
                   robot_y + self.array_offset * sin_h - self.room.origin[1])
         left = (-self.mic_spacing * sin_h, self.mic_spacing * cos_h)
-        return np.array([[centre[0] + side * left[0], centre[1] + side * left[1],
-                          self.mic_height] for side in (1.0, 0.0, -1.0)])
+        # A zero offset adds zero: the nominal positions' bits.
+        return np.array([[centre[0] + side * left[0] + (across * cos_h - along * sin_h),
+                          centre[1] + side * left[1] + (along * cos_h + across * sin_h),
+                          self.mic_height]
+                         for side, (along, across) in zip((1.0, 0.0, -1.0), self.mic_offsets)])
+
+    def _world_microphones(self, robot_x, robot_y, robot_heading):
+        """World ``(x, y)`` of M1, M2, M3 with their offsets (along the line, across it)."""
+        cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
+        centre_x = robot_x + self.array_offset * cos_h
+        centre_y = robot_y + self.array_offset * sin_h
+        return [(centre_x - side * self.mic_spacing * sin_h + (across * cos_h - along * sin_h),
+                 centre_y + side * self.mic_spacing * cos_h + (along * cos_h + across * sin_h))
+                for side, (along, across) in zip((1.0, 0.0, -1.0), self.mic_offsets)]
 
     def check_inside(self, time, source_x, source_y, robot_x, robot_y, robot_heading):
         """Raise :class:`~.room.LeftRoomError` if the source or a microphone is outside.
@@ -147,12 +163,8 @@ class RoomAcoustics:
         (x0, y0, _), (lx, ly, _) = self._bounds
         if not (x0 < source_x < x0 + lx and y0 < source_y < y0 + ly):
             self.room.check_inside("the source", (source_x, source_y, self.source_height), time)
-        cos_h, sin_h = math.cos(robot_heading), math.sin(robot_heading)
-        centre_x = robot_x + self.array_offset * cos_h
-        centre_y = robot_y + self.array_offset * sin_h
-        for name, side in (("M1", 1.0), ("M2", 0.0), ("M3", -1.0)):
-            x = centre_x - side * self.mic_spacing * sin_h
-            y = centre_y + side * self.mic_spacing * cos_h
+        for name, (x, y) in zip(("M1", "M2", "M3"),
+                                self._world_microphones(robot_x, robot_y, robot_heading)):
             if not (x0 < x < x0 + lx and y0 < y < y0 + ly):
                 self.room.check_inside(f"the robot's microphone {name}", (x, y, self.mic_height),
                                        time)
@@ -204,7 +216,12 @@ class RoomAcoustics:
                             * self.sample_rate) / self.sample_rate)
         window = (start - self.burst_duration, start + self.n_samples / self.sample_rate)
         arrivals = self.arrivals(sources, sounded, mics, velocity, reference, window)
-        return self.renderer.render(arrivals.microphone, arrivals.delay, arrivals.gain, start,
+        delay = arrivals.delay
+        if self.adc_skews is not None:
+            # Channel i samples at t_n + skew_i: its arrivals are sampled skew_i earlier
+            # (synthesis.py: exact for any waveform).
+            delay = delay - self.adc_skews[arrivals.microphone]
+        return self.renderer.render(arrivals.microphone, delay, arrivals.gain, start,
                                     self.n_samples), ranges
 
     def direct_ranges(self, source, mics, velocity, reference):

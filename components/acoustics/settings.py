@@ -1,10 +1,12 @@
 """The localizer's parameters, validated together, with the quantities derived from them."""
 
+import functools
 import math
 
 import numpy as np
 
 from ..common.errors import ParameterError
+from ..common.ranges import load_ranges
 from .burst import ChirpBurst
 from .estimators import ESTIMATORS
 from .gcc import WEIGHTINGS
@@ -49,7 +51,24 @@ DEFAULTS = {
     "reverb_cut_db": 30.0,       # dB, image sources up to rt60 * reverb_cut_db / 60
     "image_order": -1,           # reflections at most; -1: no limit (the time cut alone)
     "burst_period": 0.01,        # s, the source's emit_period; 0: the latest burst alone
+    # The array's imperfections (docs/acoustics.md): heard, never assumed by the estimator.
+    "mic_left_along": 0.0,       # m, towards the robot's left
+    "mic_left_across": 0.0,      # m, forward
+    "mic_centre_along": 0.0,     # m
+    "mic_centre_across": 0.0,    # m
+    "mic_right_along": 0.0,      # m
+    "mic_right_across": 0.0,     # m
+    "adc_skew_left": 0.0,        # s, M1's sampling instants after M2's
+    "adc_skew_right": 0.0,       # s, M3's sampling instants after M2's
 }
+
+# Per microphone (M1, M2, M3): its displacement (along, across) from the nominal array, and
+# its channel's sampling skew (M2's is the reference, 0).
+MIC_OFFSETS = (("mic_left_along", "mic_left_across"), ("mic_centre_along", "mic_centre_across"),
+               ("mic_right_along", "mic_right_across"))
+ADC_SKEWS = ("adc_skew_left", None, "adc_skew_right")
+IMPERFECTIONS = tuple(name for pair in MIC_OFFSETS for name in pair) + ("adc_skew_left",
+                                                                       "adc_skew_right")
 
 # Fixed timing of the record around a burst: noise-only lead-in before the earliest arrival,
 # and how far ahead of a detected onset a correlation window starts (covers onset jitter).
@@ -106,6 +125,11 @@ class LocalizerSettings:
         self.template = self.burst.waveform(
             np.arange(int(np.ceil(self.burst_duration * self.sample_rate))) / self.sample_rate)
         self.room_absorption, self.room_rt60, self.room_time_cut = _room_decay(values)
+        # Floats (an FMU's Real may arrive as an int 0): the synthesis adds them to floats.
+        self.mic_offsets = tuple((float(values[along]), float(values[across]))
+                                 for along, across in MIC_OFFSETS)
+        self.adc_skews = tuple(0.0 if name is None else float(values[name])
+                               for name in ADC_SKEWS)
 
     def as_dict(self):
         """Return the parameters (not the derived values) as a plain dict."""
@@ -127,6 +151,7 @@ def _problems(values):
                        ("max_range", "m")):
         problems += _finite_positive(values, name, unit)
     numbers_ok = not problems
+    problems += _imperfection_problems(values)
     if not (isinstance(values["adc_bits"], int) and 2 <= values["adc_bits"] <= 24):
         problems.append(f"adc_bits = {values['adc_bits']!r} must be an integer in 2..24")
     for name in ("snr_db", "array_offset", "onset_threshold_db", "min_peak_quality"):
@@ -164,6 +189,18 @@ def _problems(values):
     elif values["room"]:
         problems += _room_problems(values)
     return problems
+
+
+def _imperfection_problems(values):
+    """Each imperfection against its valid range in ranges.toml (the FMU's own check)."""
+    table = _port_table().parameters
+    return [problem for name in IMPERFECTIONS
+            if (problem := table[name].problem(values[name])) is not None]
+
+
+@functools.lru_cache(maxsize=1)
+def _port_table():
+    return load_ranges("acoustics")
 
 
 _ROOM_NUMBERS = (("room_origin_x", "m"), ("room_origin_y", "m"), ("room_length_x", "m"),

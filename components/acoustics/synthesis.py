@@ -5,6 +5,13 @@ For each microphone ``i`` at range ``R_i`` the record is
 scale [-1, 1) and rounded to ``2**adc_bits`` levels. The burst ``s`` is evaluated at the exact
 continuous delay, so delays are fractional, never rounded to samples. The noise ``w`` is white
 Gaussian over the full sampling band with variance set by ``snr_db`` (see :func:`noise_std`).
+
+A multiplexed ADC samples its channels one after another: channel ``i`` takes sample ``n`` at
+``t_n + skew_i``. Sampling ``s(t - tau_i)`` at ``t_n + skew_i`` is sampling
+``s(t - (tau_i - skew_i))`` at ``t_n``, an identity for any waveform, so a skew is rendered
+exactly by evaluating the burst at ``t_n + skew_i - tau_i`` (``adc_skews``); the record still
+starts on the grid set by the true arrivals. The noise is white, so its samples at the skewed
+instants are independent draws of the same law.
 The geometry is frozen for the burst: the source (<= 0.2 m/s) moves 0.2 mm during a 1 ms burst
 and the Doppler stretch (6e-4) is common to the three microphones, both far below the delay
 resolution, so motion within a burst is not modelled.
@@ -18,7 +25,7 @@ import numpy as np
 from ._rows import row_offsets
 
 __all__ = ["REFERENCE_DISTANCE", "REFERENCE_AMPLITUDE", "noise_std", "quantisation_step",
-           "synthesise_records", "record_length", "quantise"]
+           "synthesise_records", "skewed_arrivals", "record_length", "quantise"]
 
 # The SNR is defined at 1 m from the source, where the burst's peak is half the ADC full scale
 # (a preamplifier gain set so that a source at 0.5 m just reaches full scale).
@@ -47,7 +54,7 @@ def record_length(pre_roll, window, mic_spacing, speed_of_sound, sample_rate):
 
 
 def synthesise_records(burst, ranges, *, sample_rate, speed_of_sound, snr_db, adc_bits,
-                       pre_roll, n_samples, rng):
+                       pre_roll, n_samples, rng, adc_skews=None):
     """Synthesise the three microphone records of one burst, for one or many geometries.
 
     Parameters
@@ -67,6 +74,8 @@ def synthesise_records(burst, ranges, *, sample_rate, speed_of_sound, snr_db, ad
         Samples per record.
     rng : numpy.random.Generator
         Source of the noise; the only randomness.
+    adc_skews : sequence of float, optional
+        Per channel M1, M2, M3: its sampling instants' lag behind the nominal grid [s].
 
     Returns
     -------
@@ -76,22 +85,33 @@ def synthesise_records(burst, ranges, *, sample_rate, speed_of_sound, snr_db, ad
     return _synthesise(burst, np.asarray(ranges, dtype=float), sample_rate=sample_rate,
                        speed_of_sound=speed_of_sound,
                        noise_std=noise_std(burst, snr_db, sample_rate), adc_bits=adc_bits,
-                       pre_roll=pre_roll, n_samples=n_samples, rng=rng)
+                       pre_roll=pre_roll, n_samples=n_samples, rng=rng, adc_skews=adc_skews)
 
 
 def _synthesise(burst, ranges, *, sample_rate, speed_of_sound, noise_std, adc_bits, pre_roll,
-                n_samples, rng):
+                n_samples, rng, adc_skews=None):
     """:func:`synthesise_records` for an array of ranges and the noise's standard deviation."""
     arrivals = ranges / speed_of_sound
     # Start on the sample grid so that the fractional part of each arrival varies with geometry.
     start = np.floor((arrivals.min(axis=-1) - pre_roll) * sample_rate) / sample_rate
     gains = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE / ranges
-    clean = _delayed_bursts(burst, gains, arrivals, start, sample_rate, n_samples)
+    clean = _delayed_bursts(burst, gains, skewed_arrivals(arrivals, adc_skews), start,
+                            sample_rate, n_samples)
     return _quantise(clean + noise_std * rng.standard_normal(clean.shape), adc_bits)
 
 
+def skewed_arrivals(arrivals, adc_skews):
+    """Arrivals (..., 3) as the skewed channels sample them: ``arrival - skew`` (see above).
+
+    ``adc_skews`` None (or all zero) leaves ``arrivals`` as they are, bit for bit.
+    """
+    if adc_skews is None or not any(adc_skews):
+        return arrivals
+    return arrivals - np.asarray(adc_skews, dtype=float)
+
+
 def _synthesise_one(burst, ranges, *, sample_rate, speed_of_sound, noise_std, adc_bits,
-                    pre_roll, n_samples, rng):
+                    pre_roll, n_samples, rng, adc_skews=None):
     """:func:`synthesise_records` for one geometry: the same record, with fewer numpy calls.
 
     ``ranges`` are three floats and ``noise_std`` the value :func:`noise_std` gives for the
@@ -103,10 +123,13 @@ def _synthesise_one(burst, ranges, *, sample_rate, speed_of_sound, noise_std, ad
     if span >= n_samples:
         return _synthesise(burst, np.asarray(ranges, dtype=float), sample_rate=sample_rate,
                            speed_of_sound=speed_of_sound, noise_std=noise_std,
-                           adc_bits=adc_bits, pre_roll=pre_roll, n_samples=n_samples, rng=rng)
+                           adc_bits=adc_bits, pre_roll=pre_roll, n_samples=n_samples, rng=rng,
+                           adc_skews=adc_skews)
     arrivals = [distance / speed_of_sound for distance in ranges]
     # As in _synthesise: the start on the sample grid, each burst on a span around its arrival.
     start = math.floor((min(arrivals) - pre_roll) * sample_rate) / sample_rate
+    if adc_skews is not None and any(adc_skews):
+        arrivals = [arrival - skew for arrival, skew in zip(arrivals, adc_skews)]
     first = [min(max(math.floor((arrival - start) * sample_rate) - 1, 0), n_samples - span)
              for arrival in arrivals]
     # The microphones' scalars in one small array: numpy's per-call cost, not the work, counts.

@@ -96,11 +96,18 @@ ROOM_PARAMETERS = ("room", "room_origin_x", "room_origin_y", "room_length_x", "r
                    "burst_period")
 
 
+IMPERFECTIONS = ("mic_left_along", "mic_left_across", "mic_centre_along", "mic_centre_across",
+                 "mic_right_along", "mic_right_across", "adc_skew_left", "adc_skew_right")
+
+
 def test_room_parameters_come_after_every_published_variable():
+    # Each group appended after the ones published before it: older value references hold.
     root = AcousticLocalizer(instance_name="x").to_xml()
     references = {v.get("name"): int(v.get("valueReference")) for v in root.find("ModelVariables")}
+    imperfections = [references.pop(name) for name in IMPERFECTIONS]
     room = [references.pop(name) for name in ROOM_PARAMETERS]
     assert room == sorted(room) and min(room) > max(references.values())
+    assert imperfections == sorted(imperfections) and min(imperfections) > max(room)
 
 
 def room_slave(**parameters):
@@ -149,13 +156,18 @@ def test_room_relations_refused_at_initialisation():
         room_slave(mic_height=3.0)
 
 
-@pytest.mark.integration
-def test_built_fmu_runs_in_fmpy(tmp_path):
-    from fmpy import simulate_fmu
-
+@pytest.fixture(scope="module")
+def built_localizer(tmp_path_factory):
     from orchestrator.builder.fmus import build_fmu
 
-    fmu = build_fmu("AcousticLocalizer", tmp_path)
+    return build_fmu("AcousticLocalizer", tmp_path_factory.mktemp("localizer"))
+
+
+@pytest.mark.integration
+def test_built_fmu_runs_in_fmpy(built_localizer):
+    from fmpy import simulate_fmu
+
+    fmu = built_localizer
     with zipfile.ZipFile(fmu) as archive:
         root = ElementTree.fromstring(archive.read("modelDescription.xml"))
     assert root.get("modelName") == "AcousticLocalizer"
@@ -169,3 +181,68 @@ def test_built_fmu_runs_in_fmpy(tmp_path):
     assert bool(result["valid"][-1])
     assert result["distance"][-1] == pytest.approx(math.sqrt(5.0), abs=0.03)
     assert result["bearing"][-1] == pytest.approx(math.atan2(1.0, 2.0), abs=math.radians(0.2))
+
+
+IMPERFECT = dict(mic_left_along=3e-3, mic_centre_across=1e-3, mic_right_across=-2e-3,
+                 adc_skew_left=-3.3e-6, adc_skew_right=5e-6)
+
+
+def test_imperfections_reach_the_core_and_move_the_fix_as_the_exact_geometry_says():
+    from tests.support.array_geometry import nominal_fix, skewed_tdoas, true_microphones
+
+    slave = make_slave(snr_db=120.0, adc_bits=24, **IMPERFECT)
+    assert slave.do_step(0.0, 0.01) and slave.valid
+    pose = (0.0, 0.0, math.pi / 2)
+    delays = skewed_tdoas((-1.0, 2.0), true_microphones(pose, ((3e-3, 0.0), (0.0, 1e-3),
+                                                              (0.0, -2e-3))),
+                          (-3.3e-6, 0.0, 5e-6))
+    # 1e-9 s: tests/unit/components/acoustics/test_imperfections.py says why.
+    assert (slave.tdoa_12, slave.tdoa_23) == pytest.approx(delays, abs=1e-9)
+    distance, bearing = nominal_fix(*delays, guess=(2.2, 0.46))
+    assert slave.distance == pytest.approx(distance, abs=1e-4)
+    assert slave.bearing == pytest.approx(bearing, abs=1e-6)
+    assert abs(slave.distance - math.sqrt(5.0)) > 0.01
+
+
+def test_an_imperfection_outside_its_range_is_refused_at_initialisation():
+    from components.common.errors import ParameterError
+
+    with pytest.raises(ParameterError) as caught:
+        make_slave(mic_right_along=0.02, adc_skew_left=-1e-4)
+    assert str(caught.value) == (
+        "localizer: parameter mic_right_along = 0.02 is outside its valid range "
+        "[-0.01, 0.01] m; parameter adc_skew_left = -0.0001 is outside its valid range "
+        "[-2e-05, 2e-05] s")
+
+
+@pytest.mark.integration
+def test_built_fmu_hears_the_imperfect_array(built_localizer):
+    from fmpy.fmi1 import FMICallException
+
+    from orchestrator.fmu.handle import FmuInstance
+
+    names = ["tdoa_12", "tdoa_23", "distance", "bearing"]
+
+    def fix(parameters):
+        instance = FmuInstance(built_localizer, "localizer")
+        instance.instantiate(parameters={"snr_db": 120.0, "adc_bits": 24, **parameters})
+        instance.set_values({"source_x": -1.0, "source_y": 2.0, "emitting": True})
+        instance.do_step(0.0, 0.01)
+        values = instance.get_values(names + ["valid"])
+        instance.terminate()
+        return values
+
+    imperfect, perfect = fix(IMPERFECT), fix({})
+    assert imperfect["valid"] and perfect["valid"]
+    # The FMU's copy of the core gives the in-process slave's numbers, bit for bit.
+    in_process = make_slave(snr_db=120.0, adc_bits=24, **IMPERFECT)
+    in_process.do_step(0.0, 0.01)
+    assert [imperfect[name] for name in names] == [getattr(in_process, name) for name in names]
+    assert perfect["distance"] == pytest.approx(math.sqrt(5.0), abs=1e-4)
+    assert abs(imperfect["distance"] - perfect["distance"]) > 0.01
+    bad = FmuInstance(built_localizer, "bad")
+    with pytest.raises(FMICallException):
+        bad.instantiate(parameters={"mic_centre_across": 0.5})
+    assert bad.last_error() == ("bad: parameter mic_centre_across = 0.5 is outside its valid "
+                                "range [-0.01, 0.01] m")
+    bad.terminate()
