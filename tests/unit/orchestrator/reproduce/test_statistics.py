@@ -7,9 +7,10 @@ import pytest
 from scipy import stats
 
 from orchestrator.reproduce.statistics import (INCONCLUSIVE, NOT_SUPPORTED, SUPPORTED,
-                                               judge, mean_interval, paired_difference,
+                                               evidence, judge, mean_interval, median_interval,
+                                               paired_difference, paired_evidence,
+                                               paired_values, separation, sign_test,
                                                slope_interval)
-from orchestrator.reproduce.tables_tracking import _better
 
 TRIALS = 2000
 # 3 binomial standard deviations of a 95 % coverage over TRIALS intervals: 0.0146
@@ -98,32 +99,93 @@ def test_verdict_flips_across_the_threshold(shift, verdict):
     assert judge(mean_interval(-difference), 0.05, "above") == verdict
 
 
-class _FakeAnalysis:
-    """Per-cell samples for the real claim builder (no runs)."""
-
-    def __init__(self, values):
-        self._values = values
-
-    def estimate(self, cell, key):
-        return mean_interval(self._values[cell])
-
-    def difference(self, a, b, key):
-        return paired_difference(self._values[a], self._values[b])
-
-
-@pytest.mark.parametrize("improvement, verdict", [(0.30, SUPPORTED), (0.0, NOT_SUPPORTED)])
-def test_controller_claim_flips_with_a_synthetic_difference(improvement, verdict):
-    rng = np.random.default_rng(9)
-    pid = 0.10 + rng.normal(0.0, 0.005, 20)
-    fgs = pid * (1.0 - improvement) + rng.normal(0.0, 0.001, 20)
-    claim = _better(_FakeAnalysis({"pid": pid, "fgs": fgs}), "Table 8", "lower error",
-                    "error_m", "m", "fgs", "pid", "ff on", "paper")
-    assert claim.threshold == pytest.approx(-0.10 * pid.mean())
-    assert claim.verdict == verdict
-    assert claim.to_dict()["verdict"] == verdict and claim.requirement().startswith("<")
-
-
 def test_judge_without_an_interval_is_inconclusive():
     assert judge(mean_interval([1.0]), 0.0) == INCONCLUSIVE
     with pytest.raises(ValueError, match="valid choices: above, below"):
         judge(mean_interval([1.0, 2.0]), 0.0, "higher")
+
+
+# --- sign test, median interval, the choice of interval ------------------------------------
+
+def test_sign_test_counts_and_exact_p():
+    test = sign_test([0.1] * 17 + [-0.2] * 3 + [0.0])
+    assert (test.positive, test.negative, test.ties) == (17, 3, 1)
+    # exact two-sided binomial: 2 P(B <= 3), B ~ Bin(20, 1/2)
+    assert test.p_value == pytest.approx(2 * stats.binom.cdf(3, 20, 0.5))
+    assert sign_test([0.1] * 20).text() == "sign test 20/0, p = 1.9e-06"
+    assert sign_test([1.0, 2.0], center=1.5).positive == 1
+    assert sign_test([0.0, None]).p_value == 1.0
+
+
+@pytest.mark.parametrize("n, k, coverage", [(6, 1, 1 - 2 / 64), (20, 6, 0.9586), (40, 14, 0.9615)])
+def test_median_interval_order_statistics_by_hand(n, k, coverage):
+    e = median_interval(list(range(1, n + 1))[::-1])
+    assert (e.low, e.high) == (k, n - k + 1) and e.method == "median"
+    assert e.coverage == pytest.approx(coverage, abs=5e-5) and e.coverage >= 0.95
+    # one rank tighter would cover less than 95 %
+    assert 1 - 2 * stats.binom.cdf(k, n, 0.5) < 0.95
+    assert e.text(".0f").endswith("(median)")
+
+
+def test_median_interval_missing_below_six_runs():
+    e = median_interval([1.0, 2.0, 3.0, 4.0, 5.0, None])
+    assert e.mean == 3.0 and math.isnan(e.low) and e.missing == 1
+
+
+@pytest.mark.parametrize("draw, median", [
+    (lambda rng: rng.exponential(1.0, 20), math.log(2.0)),
+    (lambda rng: np.where(rng.uniform(size=20) < 0.15, 2.0, 0.04) + rng.normal(0, 0.005, 20),
+     None),
+], ids=["exponential", "bimodal"])
+def test_median_interval_covers_the_true_median(draw, median):
+    rng = np.random.default_rng(5)
+    if median is None:                   # the mixture's median: the lower cluster's centre
+        median = 0.04 + 0.005 * stats.norm.ppf(0.5 / 0.85)
+    hits = sum(e.low <= median <= e.high
+               for e in (median_interval(draw(rng)) for _ in range(TRIALS)))
+    # exact coverage 95.86 %: at least 95 % within the trials' noise
+    assert hits / TRIALS > 0.9586 - COVERAGE_TOLERANCE
+
+
+def test_separation_finds_a_minority_cluster_not_a_normal_sample():
+    rng = np.random.default_rng(2)
+    lost = list(0.045 + rng.normal(0, 0.003, 17)) + [2.18, 2.02, 0.41]
+    split = separation(lost)
+    assert split.separated and (split.below, split.above) == (0.41, 2.02)  # widest gap
+    assert "values separated" in split.text()
+    false_alarms = sum(separation(rng.normal(0, 1, 20)).separated for _ in range(1000))
+    assert false_alarms <= 5                      # 0.14 % measured: about 1.4 in 1000
+    assert separation([1.0, 2.0, 30.0]) is None   # too few runs to tell
+    assert separation([1.0] * 20) is None
+
+
+def test_a_bimodal_sample_with_lost_runs_gets_the_median_interval_and_its_counts():
+    # Table 8 at mu 0.05: 17 runs within a few cm, 3 that lost control, one failed run
+    rng = np.random.default_rng(4)
+    values = list(0.045 + rng.normal(0, 0.003, 16)) + [2.18, 2.02, 0.41, None]
+    lost = [False] * 16 + [True, True, True, False]
+    chosen = evidence(values, lost)
+    assert chosen.method == "median" and (chosen.failed, chosen.lost) == (1, 3)
+    assert "1 failed" in chosen.rule and "3 lost" in chosen.rule
+    assert chosen.estimate.high < 0.06                # not dragged by the lost runs
+    t = mean_interval(values)                         # what the t-interval would say
+    assert t.high > 0.4 and t.low < 0.045
+    text = chosen.text()
+    assert text.startswith("sign test 19/0, p = 3.8e-06; 1 failed run; 3 lost runs; ")
+    assert text.endswith("median interval")
+    # the separation alone chooses the median interval too
+    assert evidence(values[:19]).method == "median"
+    # a clean normal sample keeps the t-interval
+    normal = rng.normal(1.0, 0.1, 20)
+    clean = evidence(normal)
+    assert clean.method == "mean" and clean.estimate == mean_interval(normal)
+    assert clean.text() == "sign test 20/0, p = 1.9e-06; mean interval"
+    with pytest.raises(ValueError, match="lost flags"):
+        evidence([1.0, 2.0], [True])
+
+
+def test_paired_evidence_uses_the_pairs_where_both_ran():
+    a, b = [1.0, 2.0, None, 4.0], [0.5, 1.0, 1.0, 3.0]
+    assert paired_values(a, b) == [0.5, 1.0, None, 1.0]
+    chosen = paired_evidence(a, b)
+    assert chosen.failed == 1 and chosen.sign.positive == 3
