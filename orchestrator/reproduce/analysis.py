@@ -7,6 +7,7 @@ import numpy as np
 from orchestrator.reproduce.geometry import tangent_arc_path
 
 from .experiments import TABLE13_TARGET
+from .following import following_figures
 from .measures import arrival_figures, fix_figures, tracking_figures, wheel_profile
 from .statistics import mean_interval, paired_difference
 
@@ -61,6 +62,9 @@ class Analysis:
                     out.append(None)
                 elif "path" in labels:
                     out.append({**tracking_figures(run, SEC62_STOP_DISTANCE),
+                                **following_figures(run.data["time"], run.xy(),
+                                                    run.source_xy(),
+                                                    run.data["source.emitting"] > 0.5),
                                 **fix_figures(run)})
                 else:
                     figures = arrival_figures(run, reference_path(labels))

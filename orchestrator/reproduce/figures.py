@@ -13,13 +13,25 @@ from orchestrator.reproduce.geometry import distance_to_polyline
 from orchestrator.report.matplotlib_agg import pyplot
 
 from .analysis import CASE_TARGETS, reference_path
+from .experiments import (CONTROLLERS, FRICTIONS, NOMINAL_FRICTION, SEC62_STARTS, sec62_cell,
+                          t89_cell)
+from .following import BODY_LENGTH
 from .plotting import COLOURS, band, paths, save, traces
 from .report import Figure
 
 __all__ = ["write_figures", "write_room_figures"]
 
-_LABEL = {"pid": "CPID", "fgs_pd": "CFGS-PD", "curvature": "curvature",
+_LABEL = {**CONTROLLERS, "curvature": "curvature",
           "rotate_then_go": "rotate then go (without curvature)"}
+# Sec. 6.2's figures show the paper's start (1 m); the 3 m start is in the tables.
+_START = "start_1m"
+_START_TEXT = f"source {SEC62_STARTS[_START]:g} m at 45 deg right"
+# The paper's comparison in Figs. 13-16: CPID against CFGS-PD as printed.
+_PAPER_ARMS = ("cpid", "fgs_pd_paper")
+
+
+def _condition_text(ff, mu):
+    return f"feedforward {ff[3:]}, mu {FRICTIONS[mu] or 0.8:g}"
 
 
 def _axes_xy(ax, title):
@@ -36,7 +48,8 @@ def _deviation(reference):
 def _sec62_compare(study, out, path, number):
     """Figs. 7-8: curvature vs rotate-then-go on the straight / S-curve path."""
     plt = pyplot()
-    cells = {m: study.of(f"sec62_{path}_{m}_fgs_pd") for m in ("curvature", "rotate_then_go")}
+    cells = {m: study.of(sec62_cell(path, _START, m, "fgs_pd"))
+             for m in ("curvature", "rotate_then_go")}
     if not any(cells.values()):
         return None
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 5.5))
@@ -44,29 +57,33 @@ def _sec62_compare(study, out, path, number):
     paths(a, source_runs[:1], COLOURS["source"], "source path", alpha=1.0, source=True)
     for mode, runs in cells.items():
         paths(a, runs, COLOURS[mode], _LABEL[mode])
-    _axes_xy(a, f"Fig. {number}: {path.replace('_', '-')} path, with and without curvature")
+    _axes_xy(a, f"Fig. {number}: {path.replace('_', '-')} path, with / without curvature")
     reference = source_runs[0].source_xy() if source_runs and source_runs[0].ok else None
     series = ["source path"] + [_LABEL[m] for m in cells]
     if reference is not None:
+        # every 4th source sample: 8 mm apart at 0.2 m/s, chord error far below 0.1 mm; the
+        # source's own path belongs to neither mode's plan
+        ref = np.vstack([reference[::4], reference[-1:]])
         for mode, runs in cells.items():
-            # every 4th source sample: 8 mm apart at 0.2 m/s, chord error far below 0.1 mm
-            ref = np.vstack([[0.0, 0.0], reference[::4], reference[-1:]])
             t, m = traces(runs, None, _deviation(ref))
             band(b, t, m, _LABEL[mode], COLOURS[mode])
-    b.set(title="distance from the source's path (robot start -> source start -> path)",
-          xlabel="time [s]", ylabel="distance [m]")
+    b.set(title="distance from the source's own path", xlabel="time [s]",
+          ylabel="distance [m]")
     b.grid(True, alpha=0.3)
     b.legend(fontsize=7)
     name = f"fig{number:02d}_{'straight' if path == 'straight' else 'scurve'}_curvature.png"
-    return Figure(f"Fig. {number}", f"{path} source path: curvature planner vs rotate then go "
-                  "(CFGS-PD); right: distance from the source's path, mean and 95 % interval",
+    return Figure(f"Fig. {number}", f"{path} source path, {_START_TEXT}, CFGS-PD (default "
+                  "form), feedforward on, mu 0.8: curvature planner vs rotate then go; right: "
+                  "distance from the source's own path (a reference that is neither mode's "
+                  "plan), mean and 95 % interval",
                   save(fig, out / name), series)
 
 
-def _tracking(study, out, case, number, condition="ff_on_mu_nominal"):
-    """Figs. 13 / 15: paths of CPID and CFGS-PD, deviation from the ideal and its difference."""
+def _tracking(study, out, case, number, ff="ff_on", mu=NOMINAL_FRICTION):
+    """Figs. 13 / 15: paths of CPID and CFGS-PD as printed, deviation from the ideal and its
+    paired difference, in one stated condition."""
     plt = pyplot()
-    cells = {c: study.of(f"t89_{case}_{c}_{condition}") for c in ("pid", "fgs_pd")}
+    cells = {c: study.of(t89_cell(case, c, ff, mu)) for c in _PAPER_ARMS}
     if not any(cells.values()):
         return None
     reference = reference_path({"case": case})
@@ -76,8 +93,8 @@ def _tracking(study, out, case, number, condition="ff_on_mu_nominal"):
     a.plot(*targets.T, "g*", ms=12, label="source / target(s)")
     for control, runs in cells.items():
         paths(a, runs, COLOURS[control], _LABEL[control])
-    _axes_xy(a, f"Fig. {number}: curvature tracking, Case {1 if case == 'static' else 2} "
-             f"({case})")
+    _axes_xy(a, f"Fig. {number}: Case {1 if case == 'static' else 2} ({case}), "
+             f"{_condition_text(ff, mu)}")
     deviation = {}
     for control, runs in cells.items():
         t, m = traces(runs, None, _deviation(reference))
@@ -86,30 +103,33 @@ def _tracking(study, out, case, number, condition="ff_on_mu_nominal"):
     b.set(title="distance from the ideal path", xlabel="time [s]", ylabel="distance [m]")
     b.grid(True, alpha=0.3)
     b.legend(fontsize=7)
-    (t1, m1), (_, m2) = deviation["fgs_pd"], deviation["pid"]
+    (t1, m1), (_, m2) = deviation["fgs_pd_paper"], deviation["cpid"]
     n = min(m1.shape[0], m2.shape[0])
     k = min(m1.shape[1] if m1.size else 0, m2.shape[1] if m2.size else 0)
     if n and k:
-        band(c, t1[:k], m1[:n, :k] - m2[:n, :k], "CFGS-PD - CPID (paired)", "tab:purple")
+        band(c, t1[:k], m1[:n, :k] - m2[:n, :k], "CFGS-PD as printed - CPID (paired)",
+             "tab:purple")
     c.axhline(0.0, color="k", lw=0.8)
     c.set(title="paired difference of that distance",
           xlabel="time [s]", ylabel="difference [m]")
     c.grid(True, alpha=0.3)
     c.legend(fontsize=7)
     name = f"fig{number:02d}_{case}_tracking.png"
-    return Figure(f"Fig. {number}", f"Case {case}: paths of CPID and CFGS-PD (feedforward on, "
-                  "mu 0.8), their distance from the ideal path and its paired difference",
+    return Figure(f"Fig. {number}", f"Case {case}, {_condition_text(ff, mu)}: paths of CPID "
+                  "and CFGS-PD as printed, their distance from the ideal path and its paired "
+                  "difference",
                   save(fig, out / name),
                   ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"])
 
 
-def _wheel(study, out, cells, number, title, name, slip_cells=None):
-    """Left-wheel velocity profiles, one panel per controller, plus error (and slip)."""
+def _wheel(study, out, cells, number, title, name, slip=True):
+    """Left-wheel velocity profiles, one panel per controller, plus error and slip, every
+    panel from the same cells."""
     plt = pyplot()
     cells = {k: v for k, v in cells.items() if v}
     if not cells:
         return None
-    rows = len(cells) + 1 + (1 if slip_cells else 0)
+    rows = len(cells) + 1 + (1 if slip else 0)
     fig, axes = plt.subplots(rows, 1, figsize=(10, 2.6 * rows), sharex=True)
     series = []
     for ax, (control, runs) in zip(axes, cells.items()):
@@ -130,9 +150,9 @@ def _wheel(study, out, cells, number, title, name, slip_cells=None):
     error_ax.set(title="left-wheel speed error", ylabel="error [m/s]")
     error_ax.grid(True, alpha=0.3)
     error_ax.legend(fontsize=7)
-    if slip_cells:
+    if slip:
         slip_ax = axes[-1]
-        for control, runs in slip_cells.items():
+        for control, runs in cells.items():
             t, m = traces(runs, "plant.slip_left")
             band(slip_ax, t, m, f"{_LABEL[control]} left slip ratio", COLOURS[control])
         slip_ax.set(title="left-wheel longitudinal slip ratio", ylabel="slip ratio [1]")
@@ -140,41 +160,56 @@ def _wheel(study, out, cells, number, title, name, slip_cells=None):
         slip_ax.legend(fontsize=7)
         series.append("slip")
     axes[-1].set_xlabel("time [s]")
-    fig.suptitle(f"Fig. {number}: {title}")
-    return Figure(f"Fig. {number}", title + " (mean and 95 % interval over the runs)",
+    fig.suptitle(f"Fig. {number}: {title}", fontsize=10)
+    return Figure(f"Fig. {number}", title + ": speed, speed error and slip ratio of the same "
+                  "cells (mean and 95 % interval over the runs)",
                   save(fig, out / name), series)
 
 
 def _comparison(analysis, out):
-    """Fig. 17: final error and path RMSE of both cases, controllers and conditions."""
+    """Fig. 17: error at arrival and path RMSE of both cases, every arm and condition.
+
+    A symmetric-log axis (linear within 1 mm of zero): the figures span mm to m, and an
+    interval that reaches zero or below is drawn as it is, never clipped or hidden.
+    """
     plt = pyplot()
-    conditions = [("ff_on", "mu_nominal"), ("ff_off", "mu_nominal"), ("ff_on", "mu_low"),
-                  ("ff_off", "mu_low")]
-    if not analysis.has("t89_static_pid_ff_on_mu_nominal"):
+    if not analysis.has(t89_cell("static", "cpid", "ff_on", NOMINAL_FRICTION)):
         return None
-    fig, axes = plt.subplots(1, 2, figsize=(14, 5))
-    for ax, key, title in ((axes[0], "error_m", "final error [m]"),
+    conditions = ([(ff, NOMINAL_FRICTION) for ff in ("ff_on", "ff_off")]
+                  + [("ff_on", mu) for mu in FRICTIONS if mu != NOMINAL_FRICTION])
+    arms = [(arm, "per_second") for arm in CONTROLLERS] + [("cpid", "per_sample")]
+    fig, axes = plt.subplots(2, 1, figsize=(15, 9))
+    width = 0.8 / len(arms)
+    for ax, key, title in ((axes[0], "error_at_arrival_m", "error at arrival [m]"),
                            (axes[1], "rmse_path_m", "path RMSE [m]")):
-        labels, x = [], 0
+        labels, x, drawn = [], 0, set()
         for case in ("static", "dynamic"):
             for ff, mu in conditions:
-                for offset, control in ((-0.18, "pid"), (0.18, "fgs_pd")):
-                    e = analysis.estimate(f"t89_{case}_{control}_{ff}_{mu}", key)
-                    if e.n:
-                        err = [[e.mean - e.low], [e.high - e.mean]] if e.n > 1 else None
-                        ax.errorbar(x + offset, e.mean, yerr=err, fmt="o",
-                                    color=COLOURS[control], capsize=3,
-                                    label=_LABEL[control] if x == 0 else None)
-                labels.append(f"{case}\n{ff.replace('_', ' ')}\n{mu.replace('mu_', 'mu ')}")
+                for number, (arm, units) in enumerate(arms):
+                    cell = t89_cell(case, arm, ff, mu, units)
+                    e = analysis.estimate(cell, key) if analysis.has(cell) else None
+                    if e is None or not e.n:
+                        continue
+                    label = _LABEL[arm] + (", ki per sample" if units == "per_sample" else "")
+                    err = [[e.mean - e.low], [e.high - e.mean]] if e.n > 1 else None
+                    ax.errorbar(x + (number - (len(arms) - 1) / 2) * width, e.mean, yerr=err,
+                                fmt="o" if units == "per_second" else "s", capsize=2,
+                                color=COLOURS[arm],
+                                label=label if label not in drawn else None)
+                    drawn.add(label)
+                labels.append(f"{case}\n{_condition_text(ff, mu).replace(', ', chr(10))}")
                 x += 1
         ax.set_xticks(range(len(labels)), labels, fontsize=7)
+        ax.set_yscale("symlog", linthresh=1e-3)
         ax.set(title=f"Fig. 17: {title}, mean and 95 % interval", ylabel=title)
-        ax.set_yscale("log")
         ax.grid(True, alpha=0.3, which="both")
-        ax.legend(fontsize=8)
-    return Figure("Fig. 17", "static and dynamic curvature tracking: final error and path "
-                  "RMSE by controller, feedforward and friction (log scale)",
-                  save(fig, out / "fig17_static_dynamic_comparison.png"), ["CPID", "CFGS-PD"])
+        if drawn:
+            ax.legend(fontsize=7, ncol=3)
+    return Figure("Fig. 17", "static and dynamic curvature tracking: error at arrival and path "
+                  "RMSE by controller arm, feedforward and friction (symmetric-log axis, "
+                  "linear within 1 mm of zero)",
+                  save(fig, out / "fig17_static_dynamic_comparison.png"),
+                  [_LABEL[a] for a, _ in arms])
 
 
 def _relative(run):
@@ -196,7 +231,7 @@ def _relative(run):
 def _estimates(study, out, path, number, name, which, where=""):
     """Figs. 25 / 29 (x, y, theta) and 26 / 30 (distance, angle) of the heard source."""
     plt = pyplot()
-    runs = [r for r in study.of(f"sec62_{path}_curvature_fgs_pd") if r.ok]
+    runs = [r for r in study.of(sec62_cell(path, _START, "curvature", "fgs_pd")) if r.ok]
     if not runs:
         return None
     run = runs[0]
@@ -219,18 +254,18 @@ def _estimates(study, out, path, number, name, which, where=""):
         ax.legend(fontsize=7)
     axes[-1].set_xlabel("time [s]")
     what = "estimated source x, y, theta" if which == "xyt" else "distance and angle"
-    fig.suptitle(f"Fig. {number}: {what}, {path} path{where} (run 1 of {len(runs)}), "
-                 "robot frame")
+    fig.suptitle(f"Fig. {number}: {what}, {path} path{where}, {_START_TEXT} (run 1 of "
+                 f"{len(runs)}), robot frame", fontsize=10)
     return Figure(f"Fig. {number}", f"{path} path{where}: {what} of the source relative to "
                   "the robot, "
                   "heard vs true (first run; the tables hold all runs)",
                   save(fig, out / name), ["true", "heard"])
 
 
-def _sec62_tracking(study, out, path, number, name, bounds):
+def _sec62_tracking(study, out, path, number, name):
     """Figs. 23 / 27: source and robot paths (start, mute point) and the gap over time."""
     plt = pyplot()
-    runs = study.of(f"sec62_{path}_curvature_fgs_pd")
+    runs = study.of(sec62_cell(path, _START, "curvature", "fgs_pd"))
     if not runs:
         return None
     fig, (a, b) = plt.subplots(1, 2, figsize=(12, 6))
@@ -247,14 +282,15 @@ def _sec62_tracking(study, out, path, number, name, bounds):
     _axes_xy(a, f"Fig. {number}: {path} path tracking")
     t, gap = traces(runs, None, lambda r: np.hypot(*(r.xy() - r.source_xy()).T))
     band(b, t, gap, "gap robot - source", "tab:blue")
-    b.axhline(bounds["max_gap_m"], color="tab:red", ls="--", label="largest-gap bound")
-    b.axhline(0.35, color="k", ls=":", label="body length (collision)")
+    b.axhline(SEC62_STARTS[_START], color="tab:red", ls="--", label="starting gap")
+    b.axhline(BODY_LENGTH, color="k", ls=":", label="body length (collision)")
     b.set(title="gap between the robots", xlabel="time [s]", ylabel="gap [m]")
     b.grid(True, alpha=0.3)
     b.legend(fontsize=7)
-    return Figure(f"Fig. {number}", f"{path} path: the robot follows the source (every run) "
-                  "and the gap over time with the test's bounds", save(fig, out / name),
-                  ["source", "robot", "gap"])
+    return Figure(f"Fig. {number}", f"{path} path, {_START_TEXT}, curvature with CFGS-PD "
+                  "(default form), feedforward on, mu 0.8: the robot follows the source (every "
+                  "run) and the gap over time beside the starting gap and one body length",
+                  save(fig, out / name), ["source", "robot", "gap"])
 
 
 def _speed_trends(analysis, out, speeds):
@@ -298,31 +334,27 @@ def write_room_figures(study, out_dir):
     return written
 
 
-def write_figures(study, analysis, out_dir, speeds, bounds):
+def write_figures(study, analysis, out_dir, speeds):
     """Write every figure the study's cells allow; returns the Figure records written."""
     out = out_dir / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    nominal = "ff_on_mu_nominal"
-    figures = [
-        _speed_trends(analysis, out, speeds),
-        _sec62_compare(study, out, "straight", 7), _sec62_compare(study, out, "s_curve", 8),
-        _tracking(study, out, "static", 13),
-        _wheel(study, out, {c: study.of(f"t89_static_{c}_{nominal}") for c in ("pid", "fgs_pd")},
-               14, "left-wheel velocity profile, Case 1 (static)", "fig14_static_left_wheel.png",
-               {c: study.of(f"t89_static_{c}_ff_on_mu_low") for c in ("pid", "fgs_pd")}),
-        _tracking(study, out, "dynamic", 15),
-        _wheel(study, out, {c: study.of(f"t89_dynamic_{c}_{nominal}") for c in ("pid", "fgs_pd")},
-               16, "left-wheel velocity profile, Case 2 (dynamic)",
-               "fig16_dynamic_left_wheel.png",
-               {c: study.of(f"t89_dynamic_{c}_ff_on_mu_low") for c in ("pid", "fgs_pd")}),
-        _comparison(analysis, out),
-    ]
+    figures = [_speed_trends(analysis, out, speeds),
+               _sec62_compare(study, out, "straight", 7), _sec62_compare(study, out, "s_curve", 8)]
+    for case, number in (("static", 13), ("dynamic", 15)):
+        figures.append(_tracking(study, out, case, number))
+        for mu in (NOMINAL_FRICTION, "mu0.05"):
+            tag = "" if mu == NOMINAL_FRICTION else f"_{mu.replace('.', '')}"
+            figures.append(_wheel(
+                study, out, {c: study.of(t89_cell(case, c, "ff_on", mu)) for c in _PAPER_ARMS},
+                number + 1, f"left wheel, Case {1 if case == 'static' else 2} ({case}), "
+                f"{_condition_text('ff_on', mu)}", f"fig{number + 1}_{case}_left_wheel{tag}.png"))
+    figures.append(_comparison(analysis, out))
     for path, base, tag in (("straight", 23, "straight"), ("s_curve", 27, "scurve")):
-        cells = {c: study.of(f"sec62_{path}_curvature_{c}") for c in ("pid", "fgs_pd")}
+        cells = {c: study.of(sec62_cell(path, _START, "curvature", c)) for c in ("cpid", "fgs_pd")}
         figures += [
-            _sec62_tracking(study, out, path, base, f"fig{base}_{tag}_tracking.png", bounds),
-            _wheel(study, out, cells, base + 1, f"left-wheel velocity profile, {path} path",
-                   f"fig{base + 1}_{tag}_left_wheel.png", cells),
+            _sec62_tracking(study, out, path, base, f"fig{base}_{tag}_tracking.png"),
+            _wheel(study, out, cells, base + 1, f"left wheel, {path} path, {_START_TEXT}, "
+                   "curvature, feedforward on, mu 0.8", f"fig{base + 1}_{tag}_left_wheel.png"),
             _estimates(study, out, path, base + 2, f"fig{base + 2}_{tag}_estimates.png", "xyt"),
             _estimates(study, out, path, base + 3, f"fig{base + 3}_{tag}_distance_angle.png",
                        "da")]
@@ -330,4 +362,3 @@ def write_figures(study, analysis, out_dir, speeds, bounds):
     for figure in written:
         figure.path = f"figures/{figure.path.name}"
     return written
-

@@ -3,20 +3,23 @@
 The figures a study measures on a recorded path (used by :mod:`orchestrator.reproduce`):
 path length, the RMS distance of a path from a reference polyline sampled by arc length, the
 ideal tangent-arc path of the curvature planner through its targets (Eq. 36), the radius of
-a least-squares circle, the time from which the robot stays at rest, and the inward offset of
-a follower's path at the apexes of an S-curve.
+a least-squares circle, the time from which the robot stays at rest, the arrival at a target
+(:func:`arrival_at_target`: first at rest near it), and the inward offset of a follower's path
+at the apexes of an S-curve.
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from components.common.errors import ConfigError
 from orchestrator.run.metrics import distance_to_polyline  # the one polyline distance
 
-__all__ = ["REST_POSITION", "REST_HEADING", "REST_SETTLE", "RESAMPLE_SPACING", "path_length",
+__all__ = ["REST_POSITION", "REST_HEADING", "REST_SETTLE", "RESAMPLE_SPACING",
+           "ARRIVAL_TOLERANCE", "REST_SPEED", "REST_HOLD", "Arrival", "path_length",
            "resample_path", "distance_to_polyline", "path_rmse", "tangent_arc_path",
-           "circle_fit_radius", "arrival_time", "apex_offsets"]
+           "circle_fit_radius", "arrival_time", "arrival_at_target", "apex_offsets"]
 
 # "Arrived": the true pose stays within 5 mm and 0.01 rad (0.6 deg) of the final pose for at
 # least the last second. A wheel rocking by one encoder count (0.52 mm) at standstill stays far
@@ -25,6 +28,17 @@ REST_POSITION = 0.005           # m
 REST_HEADING = 0.01             # rad
 REST_SETTLE = 1.0               # s
 RESAMPLE_SPACING = 0.005        # m; path RMSE samples the path every 5 mm of arc length
+# Arrival at a target (arrival_at_target). "At rest": over REST_HOLD the centre stays within
+# REST_SPEED x REST_HOLD = 5 mm of where it was (a mean speed under 1 cm/s: 2.5 % of the
+# 0.4 m/s cruise, under half an encoder count of 0.52 mm per 20 ms sample) and, where the
+# heading is given, the heading within REST_HEADING. Net motion over the hold, not the
+# instantaneous wheel speed: at standstill the wheels rock by one count with rim speeds up to
+# 13 mm/s (measured in the study's runs) while the centre stays put. 0.5 s is longer than the
+# body's mechanical time constant (0.39 s, docs/plant.md) and a reversal cannot pass for rest:
+# braking at the planner's 0.4 m/s^2 moves the centre 50 mm in the 0.5 s after it stops.
+ARRIVAL_TOLERANCE = 0.10        # m; the callers' default (see measures.arrival_figures)
+REST_SPEED = 0.01               # m/s
+REST_HOLD = 0.5                 # s
 
 
 def path_length(xy):
@@ -187,6 +201,96 @@ def arrival_time(time, xy, heading, position_tolerance=REST_POSITION,
     if arrived is None or time[-1] - arrived < settle:
         return None
     return arrived
+
+
+@dataclass(frozen=True)
+class Arrival:
+    """When and how a robot arrived at its target (None fields when it never did).
+
+    Attributes
+    ----------
+    arrived : bool
+    time : float or None
+        The first sample time at which it was within the tolerance and at rest [s].
+    error : float or None
+        ``|distance to the target - stop distance|`` at that time [m].
+    drift : float or None
+        Distance from the arrival position to the final position [m]: creep after arrival.
+    """
+
+    arrived: bool
+    time: object = None
+    error: object = None
+    drift: object = None
+
+    def figures(self):
+        """``arrived`` (1.0 / 0.0), ``arrival_s``, ``error_at_arrival_m``,
+        ``drift_after_arrival_m``: the per-run figures of :mod:`.measures`."""
+        return {"arrived": 1.0 if self.arrived else 0.0, "arrival_s": self.time,
+                "error_at_arrival_m": self.error, "drift_after_arrival_m": self.drift}
+
+
+def arrival_at_target(time, xy, target, tolerance=ARRIVAL_TOLERANCE, stop_distance=0.0,
+                      heading=None, rest_speed=REST_SPEED, hold=REST_HOLD,
+                      heading_tolerance=REST_HEADING):
+    """First time the robot is within ``tolerance`` of where it should stop, and at rest.
+
+    At sample ``i`` the robot has arrived if, for every sample ``j`` with
+    ``time[i] <= time[j] <= time[i] + hold``: its distance to the target differs from
+    ``stop_distance`` by at most ``tolerance``, its centre lies within ``rest_speed * hold``
+    of ``xy[i]`` and (if ``heading`` is given) its heading within ``heading_tolerance`` of
+    ``heading[i]``; the record must cover the whole hold. An overshoot that turns back is
+    not an arrival (the centre does not stay put at the turn), nor a pass through the
+    tolerance at speed; a robot that creeps on after arriving is reported by its drift.
+
+    Parameters
+    ----------
+    time : (n,) array
+        Sample times [s].
+    xy : (n, 2) array
+        True centre positions [m].
+    target : (2,) or (n, 2) array
+        The target, fixed or per sample [m].
+    tolerance : float
+        Band [m] around the stop distance (the caller's; the planner may stop short).
+    stop_distance : float
+        Distance [m] from the target at which the planner means to stop.
+    heading : (n,) array, optional
+        True heading [rad]; with it, turning on the spot is not rest.
+    rest_speed, hold, heading_tolerance : float
+        The rest test (see the module constants).
+
+    Returns
+    -------
+    Arrival
+    """
+    time = np.asarray(time, dtype=float)
+    xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+    target = np.broadcast_to(np.asarray(target, dtype=float), xy.shape)
+    if len(time) < 2:
+        return Arrival(False)
+    error = np.abs(np.hypot(*(xy - target).T) - stop_distance)
+    turned = None if heading is None else np.unwrap(np.asarray(heading, dtype=float))
+    ok = error <= tolerance
+    ends = np.searchsorted(time, time + hold - 1e-9 * max(hold, 1.0), side="left")
+    ok &= ends < len(time)                    # the record covers the hold
+    radius = rest_speed * hold
+    longest = int(np.max(ends[ok] - np.nonzero(ok)[0])) if ok.any() else 0
+    index = np.arange(len(time))
+    for k in range(1, longest + 1):
+        if not ok.any():
+            break
+        j = np.minimum(index + k, len(time) - 1)
+        inside = index + k <= ends
+        still = ((error[j] <= tolerance) & (np.hypot(*(xy[j] - xy).T) <= radius))
+        if turned is not None:
+            still &= np.abs(turned[j] - turned) <= heading_tolerance
+        ok &= still | ~inside
+    arrived = np.nonzero(ok)[0]
+    if len(arrived) == 0:
+        return Arrival(False)
+    i = int(arrived[0])
+    return Arrival(True, float(time[i]), float(error[i]), float(np.hypot(*(xy[-1] - xy[i]))))
 
 
 def apex_offsets(source_xy, robot_xy, min_lateral=0.05):

@@ -9,12 +9,14 @@ import math
 
 import numpy as np
 
-from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_fit_radius,
-                                   path_length, path_rmse)
+from orchestrator.reproduce.geometry import (ARRIVAL_TOLERANCE, apex_offsets, arrival_at_target,
+                                             arrival_time, circle_fit_radius, path_length,
+                                             path_rmse)
+from orchestrator.reproduce.plans import own_plan_rmse, own_plans
 
 __all__ = ["DEFINITIONS", "ENCODER_PPR", "NOMINAL_WHEEL_RADIUS", "SLIP_THRESHOLD",
            "arrival_figures", "slip_figures", "wheel_profile", "tracking_figures",
-           "fix_figures", "first_heading_change"]
+           "fix_figures", "first_heading_change", "own_plan_figure"]
 
 ENCODER_PPR = 728               # counts per wheel revolution (docs/plant.md)
 NOMINAL_WHEEL_RADIUS = 0.06     # m; the robot's own conversion of counts to distance
@@ -27,8 +29,27 @@ DEFINITIONS = {
                   "of plant.x, plant.y), the whole run",
     "error_m": "distance from the robot's true centre to the (final) source position at the "
                "end of the run",
-    "arrival_s": "time from t = 0 until the robot's true pose stays within 5 mm and 0.01 rad "
-                 "of its final pose, for at least the last 1 s of the run (else missing)",
+    "settle_s": "time from t = 0 until the robot's true pose stays within 5 mm and 0.01 rad "
+                "of its final pose, for at least the last 1 s of the run (else missing)",
+    "arrived": "1 if the robot arrived (see arrival_s), else 0: runs that never arrive are "
+               "counted, their arrival figures missing",
+    "arrival_s": "first time at which the robot's true centre is within the tolerance (0.10 m "
+                 "unless the table states another) of its planned stop (the target, or the "
+                 "stop distance short of it) and at rest: for the next 0.5 s it stays within "
+                 "5 mm of that point (a mean speed under 1 cm/s), its heading within 0.01 rad "
+                 "and the whole 0.5 s within the tolerance (else missing)",
+    "error_at_arrival_m": "|distance from the robot's true centre to the target - stop "
+                          "distance| at the arrival time",
+    "drift_after_arrival_m": "distance from the robot's true centre at arrival to its final "
+                             "position: creep after arriving",
+    "rmse_own_plan_m": "RMS distance of the robot's true path, over arc length, from the plan "
+                       "its own planner had in force, laid from the true pose: curvature, the "
+                       "arc tangent to the heading through the target heard at the latest "
+                       "accepted fix (Eq. 36); rotate-then-go, the straight leg from where "
+                       "the leg started at rest towards the target heard last before it (it "
+                       "turns on the spot first); each plan continues along its own curve "
+                       "past its end. 0 for a robot that follows its plans exactly, under "
+                       "either planner",
     "radius_planner_m": "planner.radius at the first accepted fix (Eq. 36 from the heard "
                         "distance and bearing)",
     "radius_fit_m": "radius of the least-squares circle (Kasa fit) through the robot's true "
@@ -85,10 +106,32 @@ def slip_figures(run):
             "slip_time_s": float(np.count_nonzero(slip > SLIP_THRESHOLD) * dt)}
 
 
-def arrival_figures(run, reference):
-    """Tables 1-3 and 8-9: distance, final error, arrival, path RMSE, radii, turn, slip."""
+def _mode(run, mode):
+    return mode or (run.parameters or {}).get("planner.mode") or "curvature"
+
+
+def own_plan_figure(run, mode=None, stop_distance=0.0):
+    """``rmse_own_plan_m`` of a run (:mod:`orchestrator.reproduce.plans`); ``mode`` defaults
+    to the run's ``planner.mode`` parameter, else the scenarios' curvature."""
+    data = run.data
+    plans = own_plans(_mode(run, mode), run.xy(), data["plant.heading"],
+                      data["localizer.measurement_id"], data["localizer.valid"],
+                      data["localizer.distance"], data["localizer.bearing"],
+                      data["planner.v_ref_left"], data["planner.v_ref_right"], stop_distance)
+    return own_plan_rmse(run.xy(), plans)
+
+
+def arrival_figures(run, reference, tolerance=ARRIVAL_TOLERANCE, stop_distance=0.0, mode=None):
+    """Tables 1-3 and 8-9: distance, final error, arrival, path RMSEs, radii, turn, slip.
+
+    ``tolerance`` and ``stop_distance`` define the arrival (:func:`.geometry.arrival_at_target`,
+    the target being the source's final position); ``mode`` the planner whose own plans
+    ``rmse_own_plan_m`` measures.
+    """
     data, xy = run.data, run.xy()
     source = run.source_xy()
+    arrival = arrival_at_target(data["time"], xy, source[-1], tolerance, stop_distance,
+                                heading=data["plant.heading"])
     moving = np.hypot(*(xy - xy[0]).T) > 1e-3
     radius = data["planner.radius"]
     first_fix = np.nonzero((radius > 0) & (radius < 1e5))[0]
@@ -99,8 +142,10 @@ def arrival_figures(run, reference):
     return {
         "distance_m": path_length(xy),
         "error_m": float(np.hypot(*(xy[-1] - source[-1]))),
-        "arrival_s": arrival_time(data["time"], xy, data["plant.heading"]),
+        "settle_s": arrival_time(data["time"], xy, data["plant.heading"]),
+        **arrival.figures(),
         "rmse_path_m": path_rmse(xy, reference),
+        "rmse_own_plan_m": own_plan_figure(run, mode, stop_distance),
         "rmse_speed_m_s": (float(np.sqrt(np.mean(speed_error ** 2)))
                            if len(speed_error) else None),
         "radius_planner_m": float(radius[first_fix[0]]) if len(first_fix) else None,
@@ -204,8 +249,9 @@ def fix_figures(run):
     }
 
 
-def tracking_figures(run, stop_distance):
-    """Sec. 6.2: gaps, path RMSE from the source's path, mute time, apexes, slip."""
+def tracking_figures(run, stop_distance, mode=None):
+    """Sec. 6.2: gaps, path RMSEs (from the source's path, from the own plans), mute time,
+    apexes, slip; ``mode`` as in :func:`own_plan_figure`."""
     data, xy = run.data, run.xy()
     source = run.source_xy()
     gap = np.hypot(*(xy - source).T)
@@ -224,9 +270,10 @@ def tracking_figures(run, stop_distance):
         "max_gap_m": float(gap.max()),
         "min_gap_m": float(gap.min()),
         "rmse_source_path_m": path_rmse(xy, reference),
+        "rmse_own_plan_m": own_plan_figure(run, mode, stop_distance),
         "mute_s": mute,
         "stays_silent": 1.0 if stays_silent else 0.0,
-        "arrival_s": arrival_time(data["time"], xy, data["plant.heading"]),
+        "settle_s": arrival_time(data["time"], xy, data["plant.heading"]),
         "inward_offset_m": (min(offsets) if offsets and None not in offsets else None),
         **slip_figures(run),
     }

@@ -13,7 +13,8 @@ from .statistics import CONFIDENCE
 
 __all__ = ["traces", "band", "paths", "save", "COLOURS"]
 
-COLOURS = {"pid": "tab:red", "fgs_pd": "tab:blue", "curvature": "tab:blue",
+COLOURS = {"pid": "tab:red", "cpid": "tab:red", "fgs_pd": "tab:blue",
+           "fgs_pd_paper": "tab:purple", "pd_median": "tab:gray", "curvature": "tab:blue",
            "rotate_then_go": "tab:orange", "source": "tab:green", "ideal": "k"}
 
 

@@ -9,6 +9,7 @@ report's folder (figures as ``figures/fig07_....png``, runs as
 ``runs/<experiment>/runs/<hash>``), so the folder can be moved or published as it is.
 """
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,12 +19,16 @@ from orchestrator.report.document import Code, Column, Document, Strong, Verdict
 from orchestrator.report.html import write_html
 from orchestrator.report.markdown import write_markdown
 
-from .statistics import CONFIDENCE, INCONCLUSIVE, NOT_SUPPORTED, SUPPORTED, Estimate, judge
+from .claims import CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER
+from .statistics import CONFIDENCE, Estimate
 
-__all__ = ["Table", "Claim", "Comparison", "Figure", "Report", "VERDICT_TONES"]
+__all__ = ["Table", "Comparison", "Figure", "Report", "VERDICTS", "VERDICT_TONES"]
 
-# How each verdict is shown (the report's pass / fail / warn tones).
-VERDICT_TONES = _TONES = {SUPPORTED: "pass", NOT_SUPPORTED: "fail", INCONCLUSIVE: "warn"}
+# The verdicts, worst first as the summary lists them, and how each is shown (the report's
+# pass / fail / warn tones).
+VERDICTS = (CONTRADICTED, NO_EFFECT, WEAKER, INCONCLUSIVE, SUPPORTED)
+VERDICT_TONES = _TONES = {SUPPORTED: "pass", WEAKER: "warn", NO_EFFECT: "fail",
+                          CONTRADICTED: "fail", INCONCLUSIVE: "warn"}
 
 
 def _estimate_text(estimate, fmt):
@@ -52,20 +57,53 @@ _HEADLINES_PER_VERDICT = 5
 
 
 def _headlines(claims):
-    """The summary's findings: the claims not supported, then the inconclusive ones, a few
+    """The summary's findings: the paper's claims not supported, worst verdict first, a few
     each, one line per claim, and how many more the claims tables hold."""
     lines = []
-    for verdict in (NOT_SUPPORTED, INCONCLUSIVE):
-        chosen = [c for c in claims if c.verdict == verdict]
+    for verdict in VERDICTS[:-1]:
+        chosen = [c for c in claims if c.verdict == verdict and c.tally]
         for claim in chosen[:_HEADLINES_PER_VERDICT]:
             lines.append([Verdict(verdict, _TONES[verdict]),
-                          f": {claim.source}: {claim.claim} ({claim.condition}): "
-                          f"{claim.estimate.text('.3g')} {claim.unit}, needs "
-                          f"{claim.requirement()}"])
+                          f": {claim.source}: {claim.claim} ({claim.condition}, against "
+                          f"{claim.comparator}): {_effect(claim)}; {claim.requirement()}"])
         if len(chosen) > _HEADLINES_PER_VERDICT:
             lines.append(f"... and {len(chosen) - _HEADLINES_PER_VERDICT} more {verdict} in "
                          "Claims and verdicts.")
-    return lines or ["Every claim is supported."]
+    return lines or ["Every claim of the paper is supported."]
+
+
+def _effect(claim):
+    """Ours, the paper's and their ratio, as text."""
+    judged = claim.judged
+    text = f"ours {claim.estimate.text('.3g')} {claim.unit}".rstrip()
+    if claim.paper is not None:
+        text += f", paper {claim.paper:.3g}"
+        if judged.ratio is not None and math.isfinite(judged.ratio):
+            text += f" (ratio {judged.ratio:.2f})"
+    return text
+
+
+def _statistics(claim):
+    """The interval's rule, the sign test and the lost runs, as text."""
+    judged = claim.judged
+    parts = [judged.interval_rule]
+    sign = judged.sign_test
+    if sign:
+        parts.append(f"sign test {sign['plus']}+/{sign['minus']}-"
+                     + (f"/{sign['ties']}=" if sign.get("ties") else "")
+                     + f", p = {sign['p_value']:.2g}")
+    parts.append(f"{claim.failures} lost" if claim.failures else "none lost")
+    return "; ".join(parts)
+
+
+_CLAIM_COLUMNS = ["source", "claim", "condition", "against", "measure", "ours, paper (ratio)",
+                  "threshold and margin", "statistics", "verdict", "reason (measured)"]
+
+
+def _claim_row(claim):
+    return [claim.source, claim.claim, claim.condition, claim.comparator, claim.measure,
+            _effect(claim), claim.requirement(), _statistics(claim),
+            Verdict(claim.verdict, _TONES[claim.verdict]), claim.reason]
 
 
 @dataclass
@@ -95,49 +133,6 @@ class Table:
                 "rows": json_ready([{k: _plain(v) for k, v in row.items()}
                                     for row in self.rows]),
                 "notes": list(self.notes)}
-
-
-@dataclass
-class Claim:
-    """A claim of the paper judged on an interval against a stated threshold.
-
-    ``estimate`` is the interval of what the claim is about (a mean paired difference, a
-    mean slope, a mean figure); the claim holds if its true value lies ``claimed``
-    ("above" / "below") ``threshold``. The verdict is computed, never set by hand.
-    """
-
-    source: str
-    claim: str
-    condition: str
-    measure: str
-    estimate: Estimate
-    threshold: float
-    claimed: str
-    unit: str = ""
-    paper: str = ""
-    reason: str = ""
-
-    @property
-    def verdict(self):
-        """supported / not supported / inconclusive (:func:`statistics.judge`)."""
-        return judge(self.estimate, self.threshold, self.claimed)
-
-    def likely_reason(self):
-        """Why the simulation may differ from the paper, when the claim is not supported."""
-        return "" if self.verdict == "supported" else self.reason
-
-    def requirement(self):
-        """The threshold as text, e.g. ``"< -0.0120 m"``."""
-        sign = ">" if self.claimed == "above" else "<"
-        return f"{sign} {self.threshold:.4g} {self.unit}".strip()
-
-    def to_dict(self):
-        """JSON-able form."""
-        return {"source": self.source, "claim": self.claim, "condition": self.condition,
-                "measure": self.measure, "estimate": self.estimate.to_dict(),
-                "threshold": json_ready(self.threshold), "claimed": self.claimed,
-                "unit": self.unit, "requirement": self.requirement(), "paper": self.paper,
-                "verdict": self.verdict, "likely_reason": self.likely_reason()}
 
 
 @dataclass
@@ -199,10 +194,11 @@ class Report:
     html_path: Path = None
 
     def verdict_counts(self):
-        """How many claims got each verdict."""
+        """How many of the paper's claims (once per condition) got each verdict."""
         counts = {}
         for claim in self.claims:
-            counts[claim.verdict] = counts.get(claim.verdict, 0) + 1
+            if claim.tally:
+                counts[claim.verdict] = counts.get(claim.verdict, 0) + 1
         return counts
 
     def to_dict(self):
@@ -243,28 +239,35 @@ class Report:
         counts = self.verdict_counts()
         room = [self.side_by_side.headline()] if self.side_by_side is not None else []
         document.summarize([(verdict, counts.get(verdict, 0), _TONES[verdict])
-                            for verdict in (SUPPORTED, NOT_SUPPORTED, INCONCLUSIVE)],
+                            for verdict in VERDICTS],
                            room + _headlines(self.claims))
         section = document.section("Claims and verdicts")
         section.paragraph([
-            f"Each claim is judged on the {level} % interval of the quantity in 'measure' (a "
-            "mean paired difference between cells whose run i shares its draws, a mean per-run "
-            "slope over all speeds, or a mean figure): ", Strong(SUPPORTED), " if the whole "
-            "interval lies beyond the threshold on the claimed side, ", Strong(NOT_SUPPORTED),
-            " if it lies wholly on the other side, ", Strong(INCONCLUSIVE), " if it straddles "
-            "the threshold. An interval followed by '(N missing)' leaves out N runs of the cell "
-            "that gave no value (e.g. the robot never arrived). One table per verdict:"])
-        for verdict in (NOT_SUPPORTED, INCONCLUSIVE, SUPPORTED):
-            claims = [c for c in self.claims if c.verdict == verdict]
+            "Each claim is judged on one value per run of what it is about (a paired "
+            "difference between cells whose run i shares its draws, a per-run slope over the "
+            "speeds, or a figure against a bound), in the direction the paper claims, beside "
+            "the paper's own magnitude where it prints one: ", Strong(SUPPORTED),
+            " (the claimed direction, at least half the paper's magnitude), ", Strong(WEAKER),
+            " (the claimed direction, smaller), ", Strong(NO_EFFECT), " (the whole interval "
+            "inside the stated equivalence margin), ", Strong(CONTRADICTED), " (the opposite "
+            "direction beyond the margin), ", Strong(INCONCLUSIVE), " (none of these). "
+            f"The interval is the {level} % Student-t interval of the mean, or, where a cell "
+            "has lost runs or a bimodal sample, the rank-based interval of the median (its "
+            "rule is named in each row); a paired sign test and the count of lost runs (never "
+            "arrived, or failed) stand beside it. A lost run counts as the worst outcome on "
+            "its side. The tally counts the paper's claims, once per condition; design "
+            "comparisons of ours are listed apart. The reason is measured in the compared "
+            "cells (medians), not supposed."])
+        paper_claims = [c for c in self.claims if c.tally]
+        for verdict in VERDICTS:
+            claims = [c for c in paper_claims if c.verdict == verdict]
             if claims:
-                section.table(["source", "claim", "condition", "measure",
-                               f"{level} % interval", "threshold", "paper", "verdict",
-                               "likely reason (where not supported)"],
-                              [[c.source, c.claim, c.condition, c.measure,
-                                f"{c.estimate.text('.4g')} {c.unit}".strip(), c.requirement(),
-                                c.paper, Verdict(c.verdict, _TONES[c.verdict]),
-                                c.likely_reason()] for c in claims],
+                section.table(_CLAIM_COLUMNS, [_claim_row(c) for c in claims],
                               caption=f"Claims {verdict} ({len(claims)})")
+        design = [c for c in self.claims if not c.tally]
+        if design:
+            section.table(_CLAIM_COLUMNS, [_claim_row(c) for c in design],
+                          caption=f"Design comparisons, not claims of the paper ({len(design)})")
         if self.side_by_side is not None:
             self.side_by_side.add_to(document)
         section = document.section("Figures")

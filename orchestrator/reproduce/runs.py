@@ -140,7 +140,8 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
     for experiment in experiments:
         base = experiment.base_scenario(stop_time_scale)
         system = load_system(base.system, fmu_dir=fmu_dir)
-        defaults, ranges = _parameter_info(system, [t.parameter for t in tolerances])
+        defaults, ranges = _parameter_info(system, [name for t in tolerances
+                                                    for name in (t.parameter, *t.linked)])
         for cell in experiment.cells:
             points = monte_carlo_points(tolerances, defaults, cell.parameters, runs,
                                         study_seed, ranges)

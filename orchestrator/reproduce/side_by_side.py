@@ -8,13 +8,13 @@ conditions and the localizer's fix errors in the cells it is about (RMS range an
 error, range bias, share of valid fixes; :func:`~orchestrator.reproduce.measures.fix_figures`).
 """
 
-import re
 from dataclasses import dataclass, field
 
 from orchestrator.files.json_policy import json_ready
 from orchestrator.report.document import Code, Verdict
 
 from .acoustics import CONDITION_LABELS, FREE_FIELD, ROOM
+from .report import VERDICT_TONES as _TONES
 from .statistics import CONFIDENCE
 
 __all__ = ["ClaimPair", "SideBySide", "FIX_MEASURES", "side_by_side"]
@@ -24,7 +24,6 @@ FIX_MEASURES = (("fix_range_rmse_m", "range RMSE [m]", ".3g"),
                 ("fix_range_bias_m", "range bias [m]", ".3g"),
                 ("fix_bearing_rmse_deg", "bearing RMSE [deg]", ".3g"),
                 ("fix_valid_fraction", "valid fixes", ".3g"))
-_TONES = {"supported": "pass", "not supported": "fail", "inconclusive": "warn"}
 
 
 @dataclass
@@ -57,19 +56,8 @@ def _verdict(claim):
 
 
 def claim_cells(claim, cells):
-    """The cells (names) a claim is about, for the fix errors shown beside it."""
-    path = claim.condition.split(",")[0]
-    if path in ("straight", "s_curve"):
-        modes = ("curvature", "rotate_then_go") if claim.source == "Figs. 7-8" else ("curvature",)
-        return [f"sec62_{path}_{mode}_fgs_pd" for mode in modes]
-    chosen = [c for c in cells if c.startswith("t13_")]
-    speed = re.match(r"v = ([0-9.]+) m/s", claim.condition)
-    if speed:
-        chosen = [c for c in chosen if c.startswith(f"t13_v{float(speed.group(1)):g}_")]
-    for mode, text in (("rotate_then_go", "rotate then go:"), ("curvature", "curvature:")):
-        if claim.claim.startswith(text):
-            chosen = [c for c in chosen if c.endswith(f"_{mode}")]
-    return chosen
+    """The cells (names) a claim compares that ran in this study, for the fix errors."""
+    return [c for c in claim.cells if c in cells]
 
 
 def _pooled(analysis, cells, key):

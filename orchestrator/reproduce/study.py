@@ -1,5 +1,6 @@
 """The study's entry point: plan the cells, run them, judge the claims, write the report."""
 
+import math
 import os
 import time
 from pathlib import Path
@@ -15,9 +16,10 @@ from .paper import load_paper_tables
 from .report import Report
 from .runs import run_study
 from .side_by_side import side_by_side
+from .operating_point import median_operating_point
+from .tables_control import controller_tables
 from .tables_motion import motion_tables, profile_tables
-from .tables_tracking import (condition_summary, controller_tables, tracking_bounds,
-                              tracking_tables)
+from .tables_tracking import condition_summary, tracking_tables
 from .tolerances import load_tolerances
 
 __all__ = ["RUNS_PER_CELL", "check_selection", "reproduce"]
@@ -49,18 +51,6 @@ def check_selection(tables, speeds):
         raise ConfigError(f"speeds: {bad or 'empty'} not among the paper's speeds; valid "
                           f"choices: {', '.join(f'{s:g}' for s in PAPER_SPEEDS)}")
     return selected, tuple(sorted(round(float(s), 3) for s in set(speeds)))
-
-
-def _pd_forms(fmu_dir):
-    """The FGS-PD forms to run: the built one, and the pure PD if the build has a trim."""
-    from orchestrator.system import load_system
-
-    from .experiments import Experiment
-
-    system = load_system(Experiment("probe", "", "static_case1.toml", 1.0, {})
-                         .base_scenario().system, fmu_dir=fmu_dir)
-    names = {v.name for v in system.component("controller_left").model_description.modelVariables}
-    return ("as_built", "pure_pd") if "trim_ki" in names else ("as_built",)
 
 
 def _fix_dependent_claims(analysis, selected, speeds, paper):
@@ -134,8 +124,9 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
     out_dir.mkdir(parents=True, exist_ok=True)
     paper = load_paper_tables()
     tolerance_list = load_tolerances(tolerances)
-    forms = _pd_forms(fmu_dir)
-    experiments = plan(selected, speeds, forms, room_condition)
+    pd_gains = (median_operating_point(fmu_dir) if selected & {"table8", "table9"}
+                else (math.nan, math.nan))
+    experiments = plan(selected, speeds, pd_gains, room_condition)
     clearance = (check_room_fits([e for e in experiments if e.cells[0].condition == ROOM],
                                  room_condition) if room_condition else {})
     started = time.perf_counter()
@@ -186,10 +177,10 @@ def reproduce(out_dir, fmu_dir=None, workers=None, progress=True, tables=None, s
                 "failed_runs": analysis.failures(), "study_seed": study_seed,
                 "stop_time_scale": stop_time_scale, "workers": workers or os.cpu_count(),
                 "scheduler": "given" if scheduler else "local",
-                "run_time_s": run_seconds}
-    report = Report(configuration(forms, room_condition), tolerance_list, DEFINITIONS, ordered,
+                "run_time_s": run_seconds, "fixed_pd_gains": list(pd_gains)}
+    report = Report(configuration(pd_gains, room_condition), tolerance_list, DEFINITIONS, ordered,
                     claims, ratios, settings=settings, side_by_side=compared, out_dir=out_dir)
-    report.figures = write_figures(analysis.study, analysis, out_dir, speeds, tracking_bounds())
+    report.figures = write_figures(analysis.study, analysis, out_dir, speeds)
     if compared is not None:
         report.figures += write_room_figures(room_analysis.study, out_dir)
     report.settings["wall_time_s"] = time.perf_counter() - started

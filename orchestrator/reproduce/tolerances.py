@@ -23,24 +23,35 @@ __all__ = ["Tolerance", "load_tolerances", "unit_draws", "run_seed", "draw_point
 
 @dataclass(frozen=True)
 class Tolerance:
-    """One varied parameter: ``nominal * (1 + relative u)`` or ``nominal + absolute u``,
-    ``u`` uniform in [-1, 1]."""
+    """One varied parameter: ``nominal * (1 + relative u)``, ``nominal + absolute u`` or
+    ``low + (high - low) (u + 1) / 2`` for an absolute ``range`` (a band that does not sit
+    around the nominal, e.g. dry friction whose nominal is 0), ``u`` uniform in [-1, 1].
+    ``linked`` parameters get the same relative factor (one physical constant that two
+    parameters state, e.g. a motor's torque and back-EMF constants)."""
 
     parameter: str
     relative: float = None
     absolute: float = None
+    range: tuple = None
+    linked: tuple = ()
     justification: str = ""
 
     def value(self, nominal, u):
         """The drawn value for a nominal and a unit draw ``u`` in [-1, 1]."""
         if self.relative is not None:
             return float(nominal) * (1.0 + self.relative * u)
+        if self.range is not None:
+            low, high = self.range
+            return low + (high - low) * 0.5 * (u + 1.0)
         return float(nominal) + self.absolute * u
 
     def band(self):
-        """The band as text, e.g. ``"+-25 %"`` or ``"+-5"``."""
+        """The band as text, e.g. ``"+-25 %"``, ``"+-5"`` or ``"0 to 0.009"``."""
         if self.relative is not None:
-            return f"+-{100 * self.relative:g} %"
+            text = f"+-{100 * self.relative:g} %"
+            return text + "".join(f", with {name}" for name in self.linked)
+        if self.range is not None:
+            return f"{self.range[0]:g} to {self.range[1]:g}"
         return f"+-{self.absolute:g}"
 
 
@@ -78,31 +89,51 @@ def load_tolerances(path=None):
         if "." not in name:
             problems.append(f"{field}: expected instance.parameter")
             continue
-        kinds = [k for k in ("relative", "absolute") if k in entry]
-        unknown = sorted(set(entry) - {"relative", "absolute", "justification"})
+        kinds = [k for k in ("relative", "absolute", "range") if k in entry]
+        unknown = sorted(set(entry) - {"relative", "absolute", "range", "linked",
+                                       "justification"})
         if unknown:
             problems.append(f"{field}: unknown field(s) {', '.join(unknown)}; valid: "
-                            "relative, absolute, justification")
+                            "relative, absolute, range, linked, justification")
         if len(kinds) != 1:
-            problems.append(f"{field}: needs exactly one of relative, absolute")
+            problems.append(f"{field}: needs exactly one of relative, absolute, range")
             continue
         band = entry[kinds[0]]
-        limit = 1.0 if kinds[0] == "relative" else math.inf
-        if (isinstance(band, bool) or not isinstance(band, (int, float))
-                or not math.isfinite(band) or not 0.0 <= band < limit):
-            problems.append(f"{field}.{kinds[0]} = {band!r}: must be a number in "
-                            f"[0, {limit:g})")
+        linked = entry.get("linked", [])
+        if kinds[0] == "range":
+            if (not isinstance(band, list) or len(band) != 2
+                    or not all(_number(v) for v in band) or not band[0] < band[1]):
+                problems.append(f"{field}.range = {band!r}: must be [low, high], finite "
+                                "numbers with low < high")
+                continue
+            band = (float(band[0]), float(band[1]))
+        else:
+            limit = 1.0 if kinds[0] == "relative" else math.inf
+            if not _number(band) or not 0.0 <= band < limit:
+                problems.append(f"{field}.{kinds[0]} = {band!r}: must be a number in "
+                                f"[0, {limit:g})")
+                continue
+            band = float(band)
+        if linked and (kinds[0] != "relative" or not isinstance(linked, list)
+                       or not all(isinstance(n, str) and "." in n for n in linked)):
+            problems.append(f"{field}.linked = {linked!r}: a list of instance.parameter "
+                            "names, with a relative band only")
             continue
         if not str(entry.get("justification", "")).strip():
             problems.append(f"{field}: no justification")
             continue
-        tolerances.append(Tolerance(name, **{kinds[0]: float(band)},
+        tolerances.append(Tolerance(name, **{kinds[0]: band}, linked=tuple(linked),
                                     justification=" ".join(entry["justification"].split())))
     if not data.get("parameters"):
         problems.append(f"{where}: no [parameters.\"instance.parameter\"] tables")
     if problems:
         raise ConfigError("; ".join(problems))
     return tolerances
+
+
+def _number(value):
+    return (not isinstance(value, bool) and isinstance(value, (int, float))
+            and math.isfinite(value))
 
 
 def unit_draws(tolerances, index, study_seed=0):
@@ -143,18 +174,18 @@ def draw_point(tolerances, nominals, index, study_seed=0, ranges=None):
         If a nominal is missing or a drawn value leaves the parameter's valid range.
     """
     point, problems = {}, []
+    draws = unit_draws(tolerances, index, study_seed)
     for t in tolerances:
-        if t.parameter not in nominals:
-            problems.append(f"tolerance {t.parameter}: no nominal value (unknown parameter?)")
-            continue
-        value = t.value(nominals[t.parameter], unit_draws(tolerances, index, study_seed)
-                        [t.parameter])
-        low, high = (ranges or {}).get(t.parameter, (None, None))
-        if (low is not None and value < low) or (high is not None and value > high):
-            problems.append(f"tolerance {t.parameter} {t.band()} around "
-                            f"{nominals[t.parameter]:g} draws {value:g}, outside the valid "
-                            f"range [{low}, {high}]")
-        point[t.parameter] = value
+        for name in (t.parameter, *t.linked):
+            if name not in nominals:
+                problems.append(f"tolerance {name}: no nominal value (unknown parameter?)")
+                continue
+            value = t.value(nominals[name], draws[t.parameter])
+            low, high = (ranges or {}).get(name, (None, None))
+            if (low is not None and value < low) or (high is not None and value > high):
+                problems.append(f"tolerance {name} {t.band()} around {nominals[name]:g} "
+                                f"draws {value:g}, outside the valid range [{low}, {high}]")
+            point[name] = value
     if problems:
         raise ConfigError("; ".join(problems))
     point["seed"] = run_seed(index, study_seed)
@@ -166,7 +197,7 @@ def monte_carlo_points(tolerances, defaults, cell_parameters, runs, study_seed=0
 
     A parameter the cell sets itself (e.g. a low ``plant.mu``) is the nominal of its band.
     """
-    nominals = {**defaults, **{k: v for k, v in cell_parameters.items()
-                               if any(t.parameter == k for t in tolerances)}}
+    varied = {name for t in tolerances for name in (t.parameter, *t.linked)}
+    nominals = {**defaults, **{k: v for k, v in cell_parameters.items() if k in varied}}
     return [{**cell_parameters, **draw_point(tolerances, nominals, i, study_seed, ranges)}
             for i in range(runs)]

@@ -6,8 +6,7 @@ import pytest
 
 from components.common.errors import ConfigError
 from orchestrator.reproduce import (PAPER_SPEEDS, TABLES, check_selection, configuration,
-                                    formula_profiles, load_paper_tables, mean_interval, plan,
-                                    tracking_bounds)
+                                    formula_profiles, load_paper_tables, mean_interval, plan)
 from orchestrator.report.document import Document
 from orchestrator.report.markdown import render_markdown
 from orchestrator.reproduce.report import Table
@@ -66,37 +65,46 @@ def test_report_table_prints_estimates_beside_the_paper():
     assert "| 0.2 | - (2 missing) | 2.300 |" in text
 
 
-def test_plan_runs_every_condition_and_form_as_data():
-    from orchestrator.reproduce.experiments import t89_cell
+def test_plan_runs_every_arm_condition_and_reading_as_data():
+    from orchestrator.reproduce.experiments import sec62_cell, t89_cell
 
-    experiments = plan(set(TABLES), PAPER_SPEEDS, forms=("as_built", "pure_pd"))
+    experiments = plan(set(TABLES), PAPER_SPEEDS, pd_gains=(3.7, 1.2))
     cells = {c.name: c for e in experiments for c in e.cells}
-    # Tables 1-3: 5 speeds x 2 modes; Tables 8-9: 2 cases x (CPID 4 + CFGS-PD 4 x 2 forms)
-    # + 2 track-0.40 cells; Sec. 6.2: 2 paths x 3
-    assert len(cells) == 10 + 2 * (4 + 8) + 2 + 6
-    pure = cells[t89_cell("static", "fgs_pd", "ff_off", "mu_low", "pure_pd")].parameters
-    assert pure["controller_left.trim_ki"] == pure["controller_right.trim_ki"] == 0.0
-    assert pure["controller_left.feedforward"] is False and pure["plant.mu"] == 0.05
-    built = cells[t89_cell("static", "fgs_pd", "ff_on", "mu_nominal")].parameters
-    assert "controller_left.trim_ki" not in built and "plant.mu" not in built
-    sec62 = next(e for e in experiments if e.name == "sec6_2")
-    # the paper's start: 1 m away, 45 deg to the right of the robot facing +y
-    assert (sec62.parameters["source.x0"], sec62.parameters["source.y0"]) == \
-        pytest.approx((math.sin(math.pi / 4), math.cos(math.pi / 4)))
+    # Tables 1-3: 5 speeds x 2 modes; Tables 8-9: 2 cases x (4 arms x (2 feedforward + 4
+    # frictions) + 2 CPID per-sample cells) + 2 track-0.40 cells; Sec. 6.2: 2 starts x 2
+    # paths x 3 arms
+    assert len(cells) == 10 + 2 * (4 * 6 + 2) + 2 + 12
+    printed = cells[t89_cell("static", "fgs_pd_paper", "ff_on", "mu0.05")].parameters
+    assert printed["controller_left.form"] == printed["controller_right.form"] == "paper"
+    assert printed["controller_left.trim_ki"] == 0.0 and printed["plant.mu"] == 0.05
+    assert printed["controller_left.feedforward"] is True
+    assert cells[t89_cell("static", "fgs_pd_paper", "ff_off", "mu0.8")].parameters[
+        "controller_right.feedforward"] is False
+    # feedforward off runs at nominal friction only
+    assert t89_cell("static", "fgs_pd_paper", "ff_off", "mu0.05") not in cells
+    fixed = cells[t89_cell("dynamic", "pd_median", "ff_on", "mu0.8")].parameters
+    assert (fixed["controller_left.mode"], fixed["controller_left.pd_kp"],
+            fixed["controller_right.pd_kd"]) == ("pd", 3.7, 1.2)
+    assert "plant.mu" not in fixed
+    # CPID's printed ki read per second and per 20 ms sample
+    assert cells[t89_cell("static", "cpid", "ff_on", "mu0.8")].parameters[
+        "controller_left.pid_ki"] == 0.5
+    assert cells[t89_cell("static", "cpid", "ff_on", "mu0.8", "per_sample")].parameters[
+        "controller_left.pid_ki"] == pytest.approx(25.0)
+    assert t89_cell("static", "fgs_pd", "ff_on", "mu0.8", "per_sample") not in cells
+    for start, distance in (("start_1m", 1.0), ("start_3m", 3.0)):
+        sec62 = next(e for e in experiments if e.name == f"sec6_2_{start}")
+        # 45 deg to the right of the robot facing +y, at the start distance
+        assert (sec62.parameters["source.x0"], sec62.parameters["source.y0"]) == \
+            pytest.approx((distance * math.sin(math.pi / 4), distance * math.cos(math.pi / 4)))
+        assert sec62.parameters["source.y0"] + sec62.parameters["source.length"] == \
+            pytest.approx(6.0)
+        assert sec62_cell("s_curve", start, "rotate_then_go", "fgs_pd") in cells
     assert len(plan({"table1"}, (0.3,))[0].cells) == 2
 
 
 def test_configuration_states_the_verdict_deciding_assumptions():
-    text = " ".join(configuration().values())
-    for needed in ("feedforward", "Kp in [-4, -3]", "0.289", "mu = 0.05", "10 ms", "45 deg"):
-        assert needed in text
-    assert "pure PD" in configuration(("as_built", "pure_pd"))["pd_form"]
-
-
-def test_tracking_bounds_follow_from_the_speeds():
-    bounds = tracking_bounds()
-    lag = 0.2 * (0.1 + 0.3 / 0.4)                   # source speed x (fix + ramp to cruise)
-    assert bounds["max_gap_m"] == pytest.approx(1.0 + lag)
-    assert bounds["rmse_m"] == pytest.approx(lag)
-    assert bounds["final_gap_error_m"] == pytest.approx(0.3 ** 2 / 0.8 + 0.03)
-    assert tracking_bounds(v_source=0.4)["max_gap_m"] > bounds["max_gap_m"]
+    text = " ".join(configuration((3.7, 1.2)).values())
+    for needed in ("feedforward", "Kp in [-4, -3]", "0.289", "0.05", "10 ms", "45 deg",
+                   "kp 3.700, kd 1.200", "25 1/s", "1 m or 3 m"):
+        assert needed in text, needed

@@ -8,26 +8,55 @@ from orchestrator.reproduce.tolerances import (Tolerance, draw_point, load_toler
                                                monte_carlo_points, run_seed, unit_draws)
 
 DEFAULTS = {"plant.mu": 0.8, "plant.mass": 4.5, "plant.motor_resistance": 2.4,
-            "plant.wheel_radius": 0.06, "localizer.snr_db": 20.0}
+            "plant.wheel_radius": 0.06, "localizer.snr_db": 20.0,
+            "plant.torque_constant": 0.01808, "plant.back_emf_constant": 0.01808,
+            "plant.v_supply": 11.1, "plant.coulomb_friction": 0.0,
+            **{f"localizer.mic_{m}_{d}": 0.0 for m in ("left", "centre", "right")
+               for d in ("along", "across")},
+            "localizer.adc_skew_left": 0.0, "localizer.adc_skew_right": 0.0}
 
 
 def test_shipped_tolerances_have_a_band_and_a_justification_each():
     tolerances = load_tolerances()
-    assert {t.parameter for t in tolerances} == set(DEFAULTS)
+    assert {n for t in tolerances for n in (t.parameter, *t.linked)} == set(DEFAULTS)
     for t in tolerances:
         assert len(t.justification) > 40
-        assert (t.relative is None) != (t.absolute is None)
+        assert sum(x is not None for x in (t.relative, t.absolute, t.range)) == 1
+
+
+def test_linked_parameters_share_one_factor_and_a_range_ignores_the_nominal():
+    tolerances = load_tolerances()
+    points = monte_carlo_points(tolerances, DEFAULTS, {}, 400)
+    kt = np.array([p["plant.torque_constant"] for p in points])
+    ke = np.array([p["plant.back_emf_constant"] for p in points])
+    assert np.array_equal(kt, ke)                       # one constant, one factor
+    assert kt.min() >= 0.01808 * 0.9 and kt.max() <= 0.01808 * 1.1
+    assert kt.std() > 0.01808 * 0.04                    # varied: sd of U(-10 %, 10 %) 5.8 %
+    dry = np.array([p["plant.coulomb_friction"] for p in points])
+    assert dry.min() >= 0.0 and dry.max() <= 0.009 and dry.mean() == pytest.approx(0.0045,
+                                                                                    abs=5e-4)
+    supply = np.array([p["plant.v_supply"] for p in points])
+    assert supply.min() >= 9.9 and supply.max() <= 12.6
+    # a broken link (independent draws) would differ run by run
+    broken = [Tolerance("plant.torque_constant", relative=0.1, justification="x"),
+              Tolerance("plant.back_emf_constant", relative=0.1, justification="x")]
+    drawn = monte_carlo_points(broken, DEFAULTS, {}, 5)
+    assert any(p["plant.torque_constant"] != p["plant.back_emf_constant"] for p in drawn)
 
 
 @pytest.mark.parametrize("text, message", [
     ('[parameters."plant.mu"]\nrelative = 0.2\n', "no justification"),
     ('[parameters."plant.mu"]\nrelative = 0.2\nabsolute = 1\njustification = "x"\n',
-     "exactly one of relative, absolute"),
+     "exactly one of relative, absolute, range"),
+    ('[parameters."plant.mu"]\nrange = [0.5, 0.1]\njustification = "x"\n', "low < high"),
+    ('[parameters."plant.mu"]\nabsolute = 0.1\nlinked = ["plant.x"]\njustification = "x"\n',
+     "with a relative band only"),
     ('[parameters."plant.mu"]\nrelative = 1.5\njustification = "x"\n', r"relative = 1.5"),
     ('[parameters."plant.mu"]\nrelativ = 0.2\njustification = "x"\n', "unknown field"),
     ('[parameters.mu]\nrelative = 0.2\njustification = "x"\n', "instance.parameter"),
     ("[parameters\n", "not valid TOML"),
-], ids=["no-justification", "both", "too-wide", "typo", "no-instance", "bad-toml"])
+], ids=["no-justification", "both", "bad-range", "linked-absolute", "too-wide", "typo",
+        "no-instance", "bad-toml"])
 def test_bad_tolerance_files_name_file_and_field(tmp_path, text, message):
     path = tmp_path / "tol.toml"
     path.write_text(text)

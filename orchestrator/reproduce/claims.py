@@ -1,0 +1,307 @@
+"""A claim of the paper, judged on its runs: the effect, the paper's magnitude, the verdict.
+
+A :class:`Claim` holds one value per run of what the claim is about (a paired difference
+between two cells whose run i shares its draws, a per-run slope over the speeds, or a
+figure), the direction the paper claims, the paper's own magnitude of the effect in the same
+units (None where the paper gives only text) and the runs that failed or were lost. The
+interval, the sign test and the verdict are computed from those, never set by hand
+(:mod:`orchestrator.reproduce.verdicts`). The reason shown beside it is written from the
+mechanisms measured in the cells the claim compares (:func:`mechanism_text`), never a fixed
+text per claim.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from orchestrator.files.json_policy import json_ready
+
+from .statistics import mean_interval
+
+__all__ = ["SUPPORTED", "WEAKER", "NO_EFFECT", "CONTRADICTED", "INCONCLUSIVE", "Judgement",
+           "judge_claim", "Claim", "MECHANISMS", "CONTROL_MECHANISMS",
+           "MOTION_MECHANISMS", "TRACKING_MECHANISMS", "mechanism_figures", "mechanism_text", "paired_at_arrival",
+           "per_run_slopes"]
+
+
+SUPPORTED, WEAKER, NO_EFFECT = "supported", "weaker than claimed", "no effect"
+CONTRADICTED, INCONCLUSIVE = "contradicted", "inconclusive"
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """How a claim fares: the interval it was read from, the verdict and its numbers."""
+
+    category: str
+    estimate: object
+    interval_rule: str
+    sign_test: dict
+    ratio: float
+    threshold: float
+    margin: float
+    paper: float
+    claimed: str
+
+    def rule_text(self, unit=""):
+        """The rule's numbers, e.g. ``"below 0 m; no effect within +-0.0102 m"``."""
+        text = f"{self.claimed} {self.threshold:.4g} {unit}".rstrip()
+        if self.margin:
+            text += f"; no effect within +-{self.margin:.3g} {unit}".rstrip()
+        return text
+
+
+def judge_claim(samples, claimed, paper=None, threshold=0.0, margin=None, failures=0):
+    """Interim verdict (to be replaced by the verdicts module): t-interval rule."""
+    estimate = mean_interval(samples)
+    margin = 0.0 if margin is None else float(margin)
+    sign = 1.0 if claimed == "above" else -1.0
+    low, high = sorted((sign * (estimate.low - threshold), sign * (estimate.high - threshold)))
+    mean = sign * (estimate.mean - threshold)
+    ratio = (estimate.mean - threshold) / paper if paper else None
+    if estimate.n < 2 or not (math.isfinite(low) and math.isfinite(high)):
+        category = INCONCLUSIVE
+    elif high < -margin:
+        category = CONTRADICTED
+    elif margin and -margin <= low and high <= margin:
+        category = NO_EFFECT
+    elif low > 0:
+        category = (SUPPORTED if paper is None or mean >= 0.5 * abs(paper) else WEAKER)
+    else:
+        category = INCONCLUSIVE
+    return Judgement(category, estimate, "Student-t interval of the mean", {}, ratio,
+                     threshold, margin, paper, claimed)
+
+
+@dataclass
+class Claim:
+    """One claim under one condition.
+
+    Attributes
+    ----------
+    source, claim, condition : str
+        Where the paper makes it, what it says, the condition it is judged under.
+    measure : str
+        What ``samples`` hold, e.g. ``"paired difference error(CFGS-PD) - error(CPID)"``.
+    samples : list
+        One value per run (None where the run gave none).
+    claimed : str
+        ``"below"`` or ``"above"`` ``threshold``: the direction the paper claims.
+    unit : str
+    paper : float or None
+        The paper's own value of the measure (e.g. its difference of two printed numbers),
+        None where it gives only text.
+    paper_text : str
+        The paper's numbers as printed.
+    threshold : float
+        What the effect is measured from (0 for a difference; a bound for a test).
+    margin : float or None
+        Equivalence margin of "no effect" (None: the verdict rule's default).
+    comparator : str
+        What the claim compares against (e.g. ``"CPID, per-second ki"``).
+    failures : int
+        Runs of the compared cells that failed or were lost (shown beside the interval; they
+        make the interval robust).
+    reason : str
+        The mechanisms measured in the compared cells (:func:`mechanism_text`).
+    tally : bool
+        True for a claim of the paper (counted in the tally once per condition); False for a
+        design comparison of ours, listed apart.
+    cells : tuple of str
+        The cells the claim compares (for the figures shown beside it).
+    """
+
+    source: str
+    claim: str
+    condition: str
+    measure: str
+    samples: list
+    claimed: str
+    unit: str = ""
+    paper: float = None
+    paper_text: str = ""
+    threshold: float = 0.0
+    margin: float = None
+    comparator: str = ""
+    failures: int = 0
+    reason: str = ""
+    tally: bool = True
+    cells: tuple = ()
+    _judged: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def judged(self):
+        """The :class:`~orchestrator.reproduce.verdicts.Judgement` (computed once)."""
+        if self._judged is None:
+            self._judged = judge_claim(self.samples, self.claimed, self.paper,
+                                                threshold=self.threshold, margin=self.margin,
+                                                failures=self.failures)
+        return self._judged
+
+    @property
+    def estimate(self):
+        """The interval the verdict was read from (t-interval or robust, by rule)."""
+        return self.judged.estimate
+
+    @property
+    def verdict(self):
+        """supported / weaker than claimed / no effect / contradicted / inconclusive."""
+        return self.judged.category
+
+    def requirement(self):
+        """The verdict rule's numbers as text (threshold, margin, paper magnitude)."""
+        return self.judged.rule_text(self.unit)
+
+    def to_dict(self):
+        """JSON-able form."""
+        judged = self.judged
+        return {"source": self.source, "claim": self.claim, "condition": self.condition,
+                "comparator": self.comparator, "measure": self.measure,
+                "estimate": self.estimate.to_dict(), "interval_rule": judged.interval_rule,
+                "sign_test": json_ready(judged.sign_test), "failures": self.failures,
+                "claimed": self.claimed, "threshold": json_ready(self.threshold),
+                "unit": self.unit, "paper": json_ready(self.paper),
+                "paper_text": self.paper_text, "ratio": json_ready(judged.ratio),
+                "requirement": self.requirement(), "verdict": self.verdict,
+                "reason": self.reason, "tally": self.tally, "cells": list(self.cells)}
+
+
+# The mechanisms measured per cell, by kind of claim, each with how it is shown: (figure key,
+# label, scale, unit, format). They are figures of orchestrator/reproduce/measures.py and
+# orchestrator/reproduce/following.py.
+_SHOWN = {
+    "arrival_s": ("arrival", 1.0, "s", ".2f"),
+    "error_at_arrival_m": ("error at arrival", 1000.0, "mm", ".0f"),
+    "drift_after_arrival_m": ("creep after arrival", 1000.0, "mm", ".0f"),
+    "rmse_speed_m_s": ("wheel-speed RMS error", 1000.0, "mm/s", ".1f"),
+    "slip_time_s": ("slip time", 1.0, "s", ".2f"),
+    "peak_slip": ("peak slip ratio", 1.0, "", ".3f"),
+    "turn_error_deg": ("turn error", 1.0, "deg", ".1f"),
+    "radius_fit_m": ("radius driven", 1.0, "m", ".3f"),
+    "fix_range_bias_m": ("heard-range bias", 1000.0, "mm", ".0f"),
+    "fix_bearing_rmse_deg": ("heard-bearing RMS error", 1.0, "deg", ".2f"),
+    "late_gap_m": ("gap in the 2nd half", 1.0, "m", ".3f"),
+    "lane_rms_m": ("RMS from the source's path", 1000.0, "mm", ".0f"),
+    "rmse_own_plan_m": ("RMS from own plan", 1000.0, "mm", ".0f"),
+    "min_gap_m": ("smallest gap", 1.0, "m", ".3f"),
+}
+CONTROL_MECHANISMS = ("arrival_s", "error_at_arrival_m", "drift_after_arrival_m",
+                      "rmse_speed_m_s", "slip_time_s", "peak_slip")
+MOTION_MECHANISMS = ("arrival_s", "error_at_arrival_m", "rmse_speed_m_s", "turn_error_deg",
+                     "radius_fit_m", "fix_range_bias_m", "fix_bearing_rmse_deg")
+TRACKING_MECHANISMS = ("late_gap_m", "lane_rms_m", "rmse_own_plan_m", "min_gap_m",
+                       "slip_time_s", "fix_range_bias_m", "fix_bearing_rmse_deg")
+MECHANISMS = {"control": CONTROL_MECHANISMS, "motion": MOTION_MECHANISMS,
+              "tracking": TRACKING_MECHANISMS}
+
+
+def _median(values):
+    finite = [float(v) for v in values if v is not None and math.isfinite(float(v))]
+    return float(np.median(finite)) if finite else None
+
+
+def mechanism_figures(analysis, cell, keys=CONTROL_MECHANISMS):
+    """Median of each mechanism over a cell's runs, and how many runs never arrived."""
+    figures = analysis.figures(cell)
+    ran = [f for f in figures if f is not None]
+    arrived = [f for f in ran if f.get("arrived")]
+    out = {"runs": len(figures), "failed": len(figures) - len(ran),
+           "arrived": len(arrived) if ran and "arrived" in ran[0] else None}
+    for key in keys:
+        out[key] = _median([f.get(key) for f in ran])
+    return out
+
+
+def _shown(value, scale, unit, fmt):
+    return "-" if value is None else f"{value * scale:{fmt}} {unit}".strip()
+
+
+def mechanism_text(analysis, cells, kind="control"):
+    """The measured mechanisms of the compared cells, the most different first.
+
+    Parameters
+    ----------
+    analysis : Analysis
+    cells : dict
+        Label -> cell name (e.g. ``{"CFGS-PD": ..., "CPID": ...}``), two or one.
+    kind : str
+        Which mechanisms to measure (:data:`MECHANISMS`): control, motion or tracking.
+
+    Returns
+    -------
+    str
+        E.g. ``"CFGS-PD: 17/20 arrived, 3 never (final error ...); largest difference: creep
+        after arrival 0 vs 26 mm; ..."``; says so where no mechanism was measured.
+    """
+    keys = MECHANISMS[kind]
+    measured = {label: mechanism_figures(analysis, cell, keys) for label, cell in cells.items()}
+    labels = list(measured)
+    parts = []
+    for label in labels:
+        m = measured[label]
+        if m["arrived"] is not None:
+            parts.append(f"{label}: {m['arrived']}/{m['runs']} arrived"
+                         + (f", {m['failed']} failed" if m["failed"] else ""))
+        elif m["failed"]:
+            parts.append(f"{label}: {m['failed']}/{m['runs']} failed")
+    ranked = []
+    for key in keys:
+        name, scale, unit, fmt = _SHOWN[key]
+        values = [measured[label][key] for label in labels]
+        if any(v is None for v in values):
+            continue
+        if len(values) == 2:
+            spread = abs(values[0] - values[1]) / max(abs(values[0]), abs(values[1]), 1e-12)
+        else:
+            spread = 0.0
+        text = " vs ".join(_shown(v, scale, "", fmt) for v in values) + f" {unit}".rstrip()
+        ranked.append((spread, f"{name} {text}"))
+    if not ranked:
+        return "; ".join(parts + ["mechanisms not measured in these cells"])
+    ranked.sort(key=lambda item: -item[0])
+    head = ("medians " + " vs ".join(labels) + ": " if len(labels) == 2
+            else f"medians {labels[0]}: ")
+    if len(labels) == 2 and ranked[0][0] > 0.25:
+        head += f"largest difference {ranked[0][1]}; "
+        ranked = ranked[1:]
+    return "; ".join(parts + [head + "; ".join(text for _, text in ranked)])
+
+
+def paired_at_arrival(analysis, better, comparator, key):
+    """Per-run ``key(better) - key(comparator)``, losses as +-inf; and the lost-run count.
+
+    A run that never arrived (figure ``arrived`` false) or failed is a loss. Returns
+    ``(samples, losses)``, ``losses`` counting runs lost on either side.
+    """
+    samples, losses = [], 0
+    for a, b in zip(analysis.figures(better), analysis.figures(comparator)):
+        lost_a = a is None or not a.get("arrived", True)
+        lost_b = b is None or not b.get("arrived", True)
+        losses += int(lost_a) + int(lost_b)
+        if lost_a and lost_b:
+            samples.append(None)
+        elif lost_a:
+            samples.append(math.inf)
+        elif lost_b:
+            samples.append(-math.inf)
+        else:
+            x, y = a.get(key), b.get(key)
+            samples.append(None if x is None or y is None else float(x) - float(y))
+    return samples, losses
+
+
+def per_run_slopes(xs, runs):
+    """Per-run least-squares slope of a figure over ``xs`` (None for a run with < 2 values).
+
+    ``runs[i][j]`` is run ``i``'s figure at ``xs[j]`` (None where missing).
+    """
+    xs = np.asarray(xs, dtype=float)
+    slopes = []
+    for row in runs:
+        row = np.array([math.nan if v is None else float(v) for v in row])
+        ok = np.isfinite(row)
+        if ok.sum() < 2 or np.ptp(xs[ok]) == 0.0:
+            slopes.append(None)
+            continue
+        slopes.append(float(np.polyfit(xs[ok], row[ok], 1)[0]))
+    return slopes

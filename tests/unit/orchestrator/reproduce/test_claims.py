@@ -1,0 +1,113 @@
+"""Claims of the reproduction: lost runs in paired differences, reasons measured per row,
+the Sec. 6.2 following figures against exact geometry."""
+
+import math
+
+import numpy as np
+import pytest
+
+from orchestrator.reproduce.claims import (Claim, mechanism_text, paired_at_arrival,
+                                           per_run_slopes)
+from orchestrator.reproduce.following import BODY_LENGTH, following_figures
+
+
+class FakeAnalysis:
+    """Per-run figures by cell, as :class:`~orchestrator.reproduce.analysis.Analysis` gives."""
+
+    def __init__(self, cells):
+        self.cells = cells
+
+    def figures(self, cell):
+        return self.cells[cell]
+
+    def values(self, cell, key):
+        return [None if f is None else f.get(key) for f in self.cells[cell]]
+
+
+def _run(arrived=True, error=0.01, creep=0.0, slip=0.0, speed_error=0.01, arrival=8.0):
+    return {"arrived": arrived, "error_at_arrival_m": error if arrived else None,
+            "drift_after_arrival_m": creep, "slip_time_s": slip, "peak_slip": 0.01,
+            "rmse_speed_m_s": speed_error, "arrival_s": arrival if arrived else None}
+
+
+def test_a_lost_run_is_the_worst_outcome_on_its_side_and_counted():
+    analysis = FakeAnalysis({
+        "a": [_run(error=0.01), _run(arrived=False), None, _run(error=0.02)],
+        "b": [_run(error=0.03), _run(error=0.03), _run(error=0.03), _run(arrived=False)]})
+    samples, losses = paired_at_arrival(analysis, "a", "b", "error_at_arrival_m")
+    assert samples[0] == pytest.approx(-0.02)
+    assert samples[1] == math.inf and samples[2] == math.inf     # a lost (never / failed)
+    assert samples[3] == -math.inf                                 # b lost
+    assert losses == 3
+    both = FakeAnalysis({"a": [None], "b": [_run(arrived=False)]})
+    assert paired_at_arrival(both, "a", "b", "error_at_arrival_m") == ([None], 2)
+
+
+def test_reasons_differ_between_rows_whose_mechanisms_differ():
+    creeping = FakeAnalysis({
+        "fgs": [_run(creep=0.0) for _ in range(5)],
+        "pid": [_run(creep=0.026) for _ in range(5)]})
+    slipping = FakeAnalysis({
+        "fgs": [_run(slip=1.2) for _ in range(3)] + [_run(arrived=False, slip=3.0)] * 2,
+        "pid": [_run(slip=0.1) for _ in range(5)]})
+    labels = {"CFGS-PD": "fgs", "CPID": "pid"}
+    creep_text = mechanism_text(creeping, labels)
+    slip_text = mechanism_text(slipping, labels)
+    assert creep_text != slip_text
+    assert "largest difference creep after arrival 0 vs 26 mm" in creep_text
+    assert "largest difference slip time" in slip_text
+    assert "CFGS-PD: 3/5 arrived" in slip_text and "CPID: 5/5 arrived" in slip_text
+    unmeasured = FakeAnalysis({"x": [None, None]})
+    assert "mechanisms not measured" in mechanism_text(unmeasured, {"X": "x"})
+
+
+def test_per_run_slopes_are_exact_for_lines_and_skip_short_runs():
+    slopes = per_run_slopes([0.1, 0.3, 0.5], [[1.0, 1.4, 1.8], [0.0, None, 1.0],
+                                             [None, None, 2.0]])
+    assert slopes[0] == pytest.approx(2.0) and slopes[1] == pytest.approx(2.5)
+    assert slopes[2] is None
+
+
+def test_a_claim_shows_the_paper_magnitude_and_ratio():
+    samples = list(np.linspace(-0.012, -0.008, 20))              # ours: -0.010 m
+    claim = Claim("Table 8", "lower error", "c", "d", samples, "below", "m", paper=-0.102,
+                  margin=0.0102)
+    assert claim.judged.ratio == pytest.approx(0.098, abs=1e-3)
+    assert claim.to_dict()["paper"] == -0.102
+
+
+def _straight(n=401, speed=0.2, dt=0.1):
+    t = np.arange(n) * dt
+    source = np.column_stack([np.full(n, 1.0), speed * t])
+    return t, source
+
+
+def test_following_figures_against_exact_geometry():
+    t, source = _straight()
+    # a follower exactly 0.6 m behind the source on its path, starting at the start gap 1 m
+    robot = source - [0.0, 0.6]
+    robot[0] = source[0] - [0.0, 1.0]
+    emitting = np.ones(len(t), dtype=bool)
+    figures = following_figures(t, robot, source, emitting)
+    assert figures["start_gap_m"] == pytest.approx(1.0)
+    assert figures["late_gap_m"] == pytest.approx(0.6)
+    assert figures["lane_rms_m"] == pytest.approx(0.0, abs=1e-12)
+    # the same follower 0.2 m to the side of the path: exact lateral distance
+    beside = robot + [0.2, 0.0]
+    assert following_figures(t, beside, source, emitting)["lane_rms_m"] == pytest.approx(0.2)
+    assert following_figures(t, beside, source, emitting)["late_gap_m"] == pytest.approx(
+        math.hypot(0.2, 0.6))
+    assert BODY_LENGTH == 0.35
+
+
+def test_following_window_ends_when_the_source_mutes():
+    t, source = _straight()
+    emitting = np.ones(len(t), dtype=bool)
+    emitting[201:] = False                  # mutes half-way: window = its 2nd half of travel
+    robot = source - [0.0, 0.6]
+    robot[201:] = source[200] - [0.0, 3.0]  # after the mute the robot is far: not counted
+    figures = following_figures(t, robot, source, emitting)
+    assert figures["late_gap_m"] == pytest.approx(0.6)
+    silent = np.zeros(len(t), dtype=bool)
+    assert following_figures(t, robot, np.tile(source[:1], (len(t), 1)),
+                             silent)["late_gap_m"] is None
