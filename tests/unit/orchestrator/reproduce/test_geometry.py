@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from components.common.errors import ConfigError
-from orchestrator.reproduce.geometry import (apex_offsets, arrival_time, circle_fit_radius,
+from orchestrator.reproduce.geometry import (Arrival, apex_offsets, arrival_at_target,
+                                             arrival_time, circle_fit_radius,
                                    distance_to_polyline, path_length, path_rmse, resample_path,
                                    tangent_arc_path)
 
@@ -138,3 +139,76 @@ def test_the_studies_use_the_one_polyline_distance():
     # resampled every 5 mm along the line x = 0.3, the path is 0.3 m from the corner's leg
     path = np.column_stack([np.full(201, 0.3), np.linspace(-1.0, 0.0, 201)])
     assert path_rmse(path, np.array([[0.0, -1.0], [0.0, 0.0]])) == pytest.approx(0.3, abs=1e-12)
+
+
+# --- arrival at a target ---------------------------------------------------------------------
+
+DT = 0.02
+TARGET = np.array([1.0, 0.0])
+
+
+def _drive(positions_x):
+    """A robot on the x axis at the given positions, one per 20 ms sample."""
+    x = np.asarray(positions_x, dtype=float)
+    return np.arange(len(x)) * DT, np.column_stack([x, np.zeros_like(x)])
+
+
+def _ramp(start, stop, speed):
+    count = max(2, int(round(abs(stop - start) / (speed * DT))) + 1)
+    return list(np.linspace(start, stop, count))
+
+
+def test_arrives_when_at_rest_within_the_tolerance():
+    # 0.4 m/s to 0.98 m, then stands 2 s: arrives at the first standing sample
+    path = _ramp(0.0, 0.98, 0.4)
+    time, xy = _drive(path + [0.98] * 100)
+    arrival = arrival_at_target(time, xy, TARGET, tolerance=0.05)
+    assert arrival.arrived and arrival.time == pytest.approx(time[len(path) - 1])
+    assert arrival.error == pytest.approx(0.02) and arrival.drift == pytest.approx(0.0)
+    assert arrival.figures() == {"arrived": 1.0, "arrival_s": arrival.time,
+                                 "error_at_arrival_m": arrival.error,
+                                 "drift_after_arrival_m": 0.0}
+    # stopped 0.5 m short on purpose: measured from the stop distance
+    time, xy = _drive(_ramp(0.0, 0.49, 0.4) + [0.49] * 100)
+    short = arrival_at_target(time, xy, TARGET, tolerance=0.05, stop_distance=0.5)
+    assert short.arrived and short.error == pytest.approx(0.01)
+
+
+def test_an_overshoot_that_returns_arrives_on_its_return():
+    # through the target at speed to 1.2 m, brakes (0.4 m/s^2) and comes back to 1.01 m
+    out = _ramp(0.0, 1.2, 0.4)
+    back = [1.2 - 0.5 * 0.4 * (k * DT) ** 2 for k in range(1, 31)]     # 0.6 s of reversal
+    back += _ramp(back[-1], 1.01, 0.2)[1:]
+    time, xy = _drive(out + back + [1.01] * 60)
+    arrival = arrival_at_target(time, xy, TARGET, tolerance=0.05)
+    passed = time[np.argmin(np.abs(np.array(out) - 1.0))]
+    assert arrival.arrived and arrival.time > passed + 0.5
+    # within one sample of the stop (its last 4 mm step lies inside the 5 mm rest band)
+    assert arrival.time == pytest.approx(time[len(out) + len(back) - 1], abs=1.01 * DT)
+    assert arrival.error == pytest.approx(0.01, abs=0.0041)
+    # the turn at 1.2 m (0.2 m from the target) is not rest, even in a 0.3 m tolerance
+    assert arrival_at_target(time, xy, TARGET, tolerance=0.3).time == arrival.time
+
+
+def test_never_arrives_when_it_stops_outside_or_keeps_moving():
+    time, xy = _drive(_ramp(0.0, 0.8, 0.4) + [0.8] * 100)         # stops 20 cm short
+    assert arrival_at_target(time, xy, TARGET, tolerance=0.05) == Arrival(False)
+    time, xy = _drive(_ramp(0.0, 2.0, 0.4))                       # drives straight through
+    assert not arrival_at_target(time, xy, TARGET, tolerance=0.05).arrived
+    time, xy = _drive(_ramp(0.0, 0.99, 0.4) + [0.99] * 10)        # record ends within the hold
+    assert not arrival_at_target(time, xy, TARGET, tolerance=0.05).arrived
+    # turning on the spot at the target is not rest when the heading is given
+    time, xy = _drive([1.0] * 100)
+    assert arrival_at_target(time, xy, TARGET, heading=np.linspace(0, 3, 100)).arrived is False
+    assert arrival_at_target(time, xy, TARGET, heading=np.zeros(100)).time == 0.0
+
+
+def test_creep_after_arriving_is_the_drift():
+    # arrives at 1.0 m, stands 1 s, then creeps at 5 mm/s for 3 s (windup): drift 15 mm
+    approach = _ramp(0.0, 1.0, 0.4)
+    creep = [1.0 + 0.005 * k * DT for k in range(1, 151)]
+    time, xy = _drive(approach + [1.0] * 50 + creep)
+    arrival = arrival_at_target(time, xy, TARGET, tolerance=0.05)
+    assert arrival.arrived and arrival.time == pytest.approx(time[len(approach) - 1])
+    assert arrival.error == pytest.approx(0.0, abs=1e-12)
+    assert arrival.drift == pytest.approx(0.015, rel=1e-6)
