@@ -9,7 +9,7 @@ Where the t-interval does not fit the sample, the median's distribution-free int
 (:func:`median_interval`: order statistics, exact binomial coverage, no seed).
 :func:`evidence` chooses between them by one rule, stated where it is applied: the median
 interval when any run failed (its figure is missing) or was lost (the caller's flags, e.g. a
-robot that never arrived), or when the sample's values are separated into clusters
+robot that never arrived, or a value of +-inf: a loss ranked as the worst outcome), or when the sample's values are separated into clusters
 (:func:`separation`); the t-interval otherwise. Beside either it gives the paired sign test
 (:func:`sign_test`), so a claim row can print "sign test 20/0, p = 1.9e-06; 3 lost runs;
 median interval". Verdicts against the paper's magnitude are in
@@ -90,6 +90,14 @@ class Estimate:
 def _finite(samples):
     values = [float(v) for v in samples
               if v is not None and not isinstance(v, bool) and math.isfinite(float(v))]
+    return np.array(values), len(list(samples)) - len(values)
+
+
+def _ranked(samples):
+    """The samples that have a rank: finite or +-inf (a lost run as the worst outcome on its
+    side); None and nan are missing."""
+    values = [float(v) for v in samples
+              if v is not None and not isinstance(v, bool) and not math.isnan(float(v))]
     return np.array(values), len(list(samples)) - len(values)
 
 
@@ -179,6 +187,8 @@ def median_interval(samples, confidence=CONFIDENCE):
     ``B ~ Binomial(n, 1/2)``, is at least ``confidence``: the number of samples below the
     true median is ``B`` for any continuous distribution, so the coverage is exact, with no
     assumption on the shape and no random resampling. It is the inversion of the sign test.
+    Ranks need no finite values: a run entered as +-inf (lost, the worst outcome on its side)
+    takes its place at the end, and a bound is infinite only if the losses reach its rank.
     For ``n = 20`` at 95 %: ``[x_(6), x_(15)]``, coverage 95.9 %; fewer than 6 samples cannot
     reach 95 % (``[min, max]`` of 5 covers 93.75 %), and the interval is then missing.
 
@@ -202,13 +212,15 @@ def median_interval(samples, confidence=CONFIDENCE):
     (6.0, 15.0, 0.9586)
     """
     samples = list(samples)
-    values, missing = _finite(samples)
+    values, missing = _ranked(samples)
     values = np.sort(values)
     n = len(values)
     if n == 0:
         return Estimate(math.nan, math.nan, math.nan, 0, math.nan, missing, "median", math.nan)
-    median = float(np.median(values))
-    std = float(values.std(ddof=1)) if n > 1 else math.nan
+    middle = values[(n - 1) // 2], values[n // 2]
+    median = float(middle[0] if middle[0] == middle[1] else 0.5 * (middle[0] + middle[1]))
+    finite = values[np.isfinite(values)]
+    std = float(finite.std(ddof=1)) if len(finite) > 1 else math.nan
     # the smallest k with P(B <= k) >= alpha / 2, so P(B <= k - 1) < alpha / 2: the largest
     # k whose interval covers at least 1 - alpha
     k = int(stats.binom.ppf((1.0 - confidence) / 2.0, n, 0.5))
@@ -238,8 +250,8 @@ class SignTest:
 def sign_test(differences, center=0.0):
     """Exact two-sided sign test of paired differences against ``center``.
 
-    Counts the finite differences above and below ``center``; exact ties are left out (the
-    usual convention). Under the null hypothesis that either side is equally likely, the
+    Counts the differences above and below ``center`` (+-inf count on their side; None and
+    nan are left out); exact ties are left out (the usual convention). Under the null hypothesis that either side is equally likely, the
     number above is ``Binomial(positive + negative, 1/2)``; the p-value is the exact
     two-sided binomial one (:func:`scipy.stats.binomtest`), 1 when every run ties.
 
@@ -252,7 +264,7 @@ def sign_test(differences, center=0.0):
     >>> sign_test([0.1] * 20).text()
     'sign test 20/0, p = 1.9e-06'
     """
-    values, _ = _finite(list(differences))
+    values, _ = _ranked(list(differences))
     positive = int(np.count_nonzero(values > center))
     negative = int(np.count_nonzero(values < center))
     ties = len(values) - positive - negative
@@ -365,7 +377,8 @@ def evidence(samples, lost=None, center=0.0, confidence=CONFIDENCE):
         One value per run (e.g. the paired differences, :func:`paired_values`).
     lost : sequence of bool, optional
         Per run, True if the run lost control (the caller's criterion, e.g. it never
-        arrived); aligned with ``samples``.
+        arrived); aligned with ``samples``. A sample of +-inf counts as lost too (a lost run
+        entered as the worst outcome on its side) and keeps its rank.
     center : float
         Reference of the sign test (the claim's threshold, usually 0).
     confidence : float
@@ -376,13 +389,13 @@ def evidence(samples, lost=None, center=0.0, confidence=CONFIDENCE):
     Evidence
     """
     samples = list(samples)
-    lost_count = 0
-    if lost is not None:
-        lost = list(lost)
-        if len(lost) != len(samples):
-            raise ValueError(f"lost flags for {len(lost)} runs, samples of {len(samples)}")
-        lost_count = sum(1 for flag in lost if flag)
-    failed = len(samples) - len(_finite(samples)[0])
+    lost = [False] * len(samples) if lost is None else list(lost)
+    if len(lost) != len(samples):
+        raise ValueError(f"lost flags for {len(lost)} runs, samples of {len(samples)}")
+    infinite = [v is not None and not isinstance(v, bool) and math.isinf(float(v))
+                for v in samples]
+    lost_count = sum(1 for flag, inf in zip(lost, infinite) if flag or inf)
+    failed = len(samples) - len(_ranked(samples)[0])
     split = separation(samples)
     reasons = []
     if failed:

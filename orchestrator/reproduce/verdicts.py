@@ -10,7 +10,8 @@ equivalence margin, and first turns our numbers so that the claimed direction is
 ``[lo, hi]`` and point ``e`` (the estimate's mean, or its median for a median interval):
 
 1. no interval (fewer than two runs, or too few for the interval's coverage):
-   :data:`INCONCLUSIVE`;
+   :data:`INCONCLUSIVE`; an infinite bound (lost runs ranked as the worst outcome) is an
+   interval;
 2. the whole interval inside the margin, ``-margin <= lo`` and ``hi <= margin``:
    :data:`NO_EFFECT` (an equivalence test: whatever the true effect, it is too small to matter);
 3. the whole interval beyond the margin on the opposite side, ``hi < -margin``:
@@ -100,7 +101,7 @@ class Verdict:
         """One line for the report, e.g. ``weaker than claimed: ours -0.0102 [-0.012,
         -0.0084] m vs paper's magnitude 0.102 m (ratio 0.1; supported needs >= 0.5); ...``."""
         unit = f" {unit}" if unit else ""
-        ours = (format(self.ours, fmt) if not _finite(self.low)
+        ours = (format(self.ours, fmt) if self.low is None or math.isnan(self.low)
                 else f"{self.ours:{fmt}} [{self.low:{fmt}}, {self.high:{fmt}}]")
         line = f"{self.category}: ours {ours}{unit}"
         if self.paper is not None:
@@ -175,7 +176,8 @@ def classify(estimate, paper=None, claimed="above", threshold=0.0,
         return Verdict(category, point, low, high, paper, ratio, claimed, threshold, margin,
                        support_fraction, rule)
 
-    if estimate.n < 2 or not (_finite(low) and _finite(high)):
+    if estimate.n < 2 or math.isnan(low) or math.isnan(high) or math.isnan(point):
+        # an infinite bound is an interval (losses ranked at its end), nan is none
         return verdict(INCONCLUSIVE, f"no interval ({estimate.n} runs)")
     lo, hi = sorted((sign * (low - threshold), sign * (high - threshold)))
     e = sign * (point - threshold)

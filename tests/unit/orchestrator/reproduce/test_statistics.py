@@ -189,3 +189,17 @@ def test_paired_evidence_uses_the_pairs_where_both_ran():
     assert paired_values(a, b) == [0.5, 1.0, None, 1.0]
     chosen = paired_evidence(a, b)
     assert chosen.failed == 1 and chosen.sign.positive == 3
+
+
+def test_lost_runs_entered_as_infinite_keep_their_rank():
+    # 17 pairs 5 mm better, 3 where only the comparator lost (-inf: best for "below")
+    differences = [-0.005 + 0.0001 * k for k in range(17)] + [-math.inf] * 3
+    chosen = evidence(differences)
+    assert (chosen.failed, chosen.lost, chosen.method) == (0, 3, "median")
+    assert chosen.sign.negative == 20 and chosen.estimate.n == 20
+    e = chosen.estimate                     # ranks 6 and 15 of 20: -inf x3 then the rest
+    assert (e.low, e.high) == (sorted(differences)[5], sorted(differences)[14])
+    # when the losses reach the bound's rank, the bound is infinite, still an interval
+    many = median_interval([1.0] * 10 + [math.inf] * 10)
+    assert many.low == 1.0 and many.high == math.inf
+    assert evidence([1.0, 2.0], [True, False]).lost == 1

@@ -92,3 +92,11 @@ def test_verdict_to_dict_is_json_ready():
 
 def test_module_examples():
     assert doctest.testmod(verdicts).failed == 0
+
+
+def test_an_unbounded_interval_from_lost_runs_is_judged():
+    # the claimed-better arm never lost, the comparator lost often: (-inf, -0.02]
+    verdict = classify(interval(-0.06, -math.inf, -0.02), PAPER, "below", margin=MARGIN)
+    assert verdict.category == SUPPORTED
+    assert "[-inf, -0.02]" in verdict.text()
+    assert classify(interval(0.05, -math.inf, math.inf), PAPER, "below").category == INCONCLUSIVE
