@@ -203,3 +203,10 @@ def test_lost_runs_entered_as_infinite_keep_their_rank():
     many = median_interval([1.0] * 10 + [math.inf] * 10)
     assert many.low == 1.0 and many.high == math.inf
     assert evidence([1.0, 2.0], [True, False]).lost == 1
+
+
+def test_module_examples():
+    import doctest
+
+    from orchestrator.reproduce import statistics
+    assert doctest.testmod(statistics).failed == 0
