@@ -121,14 +121,19 @@ def span_words(low, high):
 
 
 def _range_words(ranges):
+    if not ranges["box"]:
+        # the box always contains the nominal wheel, so no box means it fails there
+        return (f"fails on RobotPlant's own wheel ({ranges['passing']} of {ranges['cells']} "
+                "wheels pass)")
+
     def span(pair, what):
         return f"{what} {span_words(*pair)}" if pair else f"not at {what} x1"
     box = ranges["box"]
     boxed = (f"largest box gain {span_words(box[0], box[1])} by tau "
-             f"{span_words(box[2], box[3])}" if box else "fails on RobotPlant's own wheel")
+             f"{span_words(box[2], box[3])}")
     return (f"holds for {span(ranges['gain_at_tau_1'], 'gain')} at tau x1 and "
             f"{span(ranges['tau_at_gain_1'], 'tau')} at gain x1; {boxed} "
-            f"({ranges['passing']} of {ranges['cells']} wheels)")
+            f"({ranges['passing']} of {ranges['cells']} wheels pass)")
 
 
 def _worst(rows):

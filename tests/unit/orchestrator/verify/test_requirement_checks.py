@@ -39,6 +39,19 @@ def test_no_range_when_the_nominal_wheel_fails():
     assert ranges["box"] is None and ranges["gain_at_tau_1"] is None
 
 
+def test_ranges_in_words_when_the_nominal_wheel_fails_or_holds():
+    table, judged = REQ["off_nominal_settling"], judged_cells(GRID)
+    failing = check_requirement("off_nominal_settling", "default",
+                                _rows(lambda g, t: (g, t) != (1.0, 1.0)), None, GRID, table,
+                                judged)
+    assert "it fails on RobotPlant's own wheel (19 of 20 wheels pass)." in failing.measured
+    assert "holds for not at" not in failing.measured
+    holding = check_requirement("off_nominal_settling", "default", _rows(lambda g, t: g <= 2),
+                                None, GRID, table, judged)
+    assert ("it holds for gain x0.25..x2 at tau x1 and tau x0.2..x2 at gain x1; largest box "
+            "gain x0.25..x2 by tau x0.2..x2 (16 of 20 wheels pass)") in holding.measured
+
+
 def test_verdict_is_on_the_judged_cells_and_the_fmus():
     judged = judged_cells(GRID)
     everywhere = _rows(lambda g, t: True)
