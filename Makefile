@@ -31,7 +31,8 @@ FMI_WARNINGS := -Wall -Wextra -Werror -Wshadow -Wformat=2 -Wconversion -Wsign-co
 	-Wmissing-prototypes -Wstrict-prototypes -Wpointer-arith -Wcast-qual -Wundef -Wvla
 
 .PHONY: install fmus demo test test-unit benchmarks clean chromium fmi-binary fmi-binary-sanitized tbb \
-	python-check cc-check debian11-root
+	python-check cc-check debian11-root debian12-root \
+	portable-fmus
 
 install: $(STAMP)
 
@@ -100,6 +101,12 @@ $(STAMP): pyproject.toml constraints.txt
 fmus: $(STAMP) $(FMI_BINARY)
 	$(BIN)/sonotrack build --out $(FMU_DIR)
 
+# FMUs that carry their own Python runtime (docs/fmi_binary.md, "Portable FMUs"), in a folder of
+# their own; strip (binutils) comes with the C compiler on Debian.
+PORTABLE_FMU_DIR := build/portable-fmus
+portable-fmus: $(STAMP) $(FMI_BINARY)
+	$(BIN)/sonotrack build --portable --out $(PORTABLE_FMU_DIR)
+
 demo: fmus
 	$(BIN)/sonotrack run $(SCENARIO) --out runs/demo
 
@@ -116,36 +123,44 @@ chromium:
 	    >/dev/null 2>&1)) || echo "chromium: apt-get install failed; browser checks will skip"; \
 	else echo "chromium: not root or no apt-get; browser checks will skip"; fi
 
-# A Debian 11 (glibc 2.31, no Python) minimal root for the FMI binary's glibc-floor test
-# (tests/integration/orchestrator/builder/fmi_binary/test_old_glibc.py), made once by debootstrap
-# (installed from Debian when we are root and apt works; Debian's default mirror) and kept outside
-# the repository (SONOTRACK_DEBIAN11_ROOT, the test reads the same variable). Never fails the
-# build: where it cannot be made, the test says why it skipped.
-SONOTRACK_DEBIAN11_ROOT ?= $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/sonotrack/roots/debian11
-DEBIAN11_ROOT := $(SONOTRACK_DEBIAN11_ROOT)
-debian11-root:
-	@if [ -e "$(DEBIAN11_ROOT)/.complete" ]; then :; \
-	elif [ "$$(id -u)" != 0 ]; then echo "debian11-root: not root; the old-glibc test will skip"; \
+# Debian minimal roots with no Python, made once by debootstrap (installed from Debian when we are
+# root and apt works; Debian's default mirror) and kept outside the repository, for the tests that
+# run FMUs away from this machine's Python: Debian 11 (glibc 2.31) for the FMI binary's glibc floor
+# (tests/integration/orchestrator/builder/fmi_binary/test_old_glibc.py), Debian 12 for portable
+# FMUs (tests/integration/orchestrator/builder/portable/test_no_python.py). The tests read the
+# same variables. Never fails the build: where a root cannot be made, its test says why it
+# skipped. $(call DEBIAN_ROOT,<folder>,<suite>,<name>,<what it is for>)
+ROOTS_DIR := $(or $(XDG_CACHE_HOME),$(HOME)/.cache)/sonotrack/roots
+SONOTRACK_DEBIAN11_ROOT ?= $(ROOTS_DIR)/debian11
+SONOTRACK_DEBIAN12_ROOT ?= $(ROOTS_DIR)/debian12
+DEBIAN_ROOT = \
+	if [ -e "$(1)/.complete" ]; then :; \
+	elif [ "$$(id -u)" != 0 ]; then echo "$(3): not root; the $(4) test will skip"; \
 	else \
 	  if ! command -v debootstrap >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then \
-	    echo "installing Debian debootstrap for the old-glibc test"; \
+	    echo "installing Debian debootstrap for the $(4) test"; \
 	    DEBIAN_FRONTEND=noninteractive apt-get install -y debootstrap >/dev/null 2>&1 || \
 	    (apt-get update >/dev/null 2>&1 && \
 	    DEBIAN_FRONTEND=noninteractive apt-get install -y debootstrap >/dev/null 2>&1); \
 	  fi; \
 	  if ! command -v debootstrap >/dev/null 2>&1; then \
-	    echo "debian11-root: debootstrap cannot be installed; the old-glibc test will skip"; \
+	    echo "$(3): debootstrap cannot be installed; the $(4) test will skip"; \
 	  else \
-	    echo "making a Debian 11 minimal root in $(DEBIAN11_ROOT) (once, a few minutes)"; \
-	    rm -rf "$(DEBIAN11_ROOT).partial" && mkdir -p "$(dir $(DEBIAN11_ROOT))" && \
-	    debootstrap --variant=minbase bullseye "$(DEBIAN11_ROOT).partial" \
-	      >"$(dir $(DEBIAN11_ROOT))debootstrap.log" 2>&1 && \
-	    rm -rf "$(DEBIAN11_ROOT)" && mv "$(DEBIAN11_ROOT).partial" "$(DEBIAN11_ROOT)" && \
-	    touch "$(DEBIAN11_ROOT)/.complete" || \
-	    echo "debian11-root: debootstrap failed (see $(dir $(DEBIAN11_ROOT))debootstrap.log); \
-	the old-glibc test will skip"; \
+	    echo "making a Debian $(2) minimal root in $(1) (once, a few minutes)"; \
+	    rm -rf "$(1).partial" && mkdir -p "$(dir $(1))" && \
+	    debootstrap --variant=minbase $(2) "$(1).partial" \
+	      >"$(1).debootstrap.log" 2>&1 && \
+	    rm -rf "$(1)" && mv "$(1).partial" "$(1)" && \
+	    touch "$(1)/.complete" || \
+	    echo "$(3): debootstrap failed (see $(1).debootstrap.log); the $(4) test will skip"; \
 	  fi; \
 	fi
+
+debian11-root:
+	@$(call DEBIAN_ROOT,$(SONOTRACK_DEBIAN11_ROOT),bullseye,debian11-root,old-glibc)
+
+debian12-root:
+	@$(call DEBIAN_ROOT,$(SONOTRACK_DEBIAN12_ROOT),bookworm,debian12-root,portable-FMU)
 
 # ecos (the C++ engine in the ecospy wheel) needs Debian's libtbb12 to start; the ecos tests
 # (tests/integration/orchestrator/hosts/test_ecos.py) skip, saying why, where it cannot be installed.
@@ -159,7 +174,7 @@ tbb:
 	    || echo "libtbb12: apt-get install failed; ecos tests will skip"; \
 	else echo "libtbb12: not root or no apt-get; ecos tests will skip"; fi
 
-test: $(STAMP) chromium tbb debian11-root $(FMI_BINARY)
+test: $(STAMP) chromium tbb debian11-root debian12-root $(FMI_BINARY)
 	$(BIN)/python -m pytest -q
 
 test-unit: $(STAMP) chromium $(FMI_BINARY)

@@ -30,7 +30,7 @@ def _cmd_build(args):
         from orchestrator.scenario import find_scenario
 
         scenario = find_scenario(args.scenario or DEFAULT_SCENARIO)
-    paths = build_all(args.out, names)
+    paths = build_all(args.out, names, portable=args.portable)
     for path in paths:
         print(f"built {path}")
     if names is None:
@@ -38,7 +38,8 @@ def _cmd_build(args):
     if args.system:
         from orchestrator.run.as_fmu import build_scenario_fmu
 
-        print(f"built {build_scenario_fmu(scenario, args.out, fmu_dir=args.out)}")
+        built = build_scenario_fmu(scenario, args.out, fmu_dir=args.out, portable=args.portable)
+        print(f"built {built}")
     return 0
 
 
@@ -214,12 +215,17 @@ def _parser(command=None):
                      "Build the FMI 2.0 co-simulation FMUs (all five by default) and the "
                      "SSP archive tracking.ssp.",
                      ["sonotrack build", "sonotrack build WheelController --out /tmp/fmus",
-                      "sonotrack build --system"])
+                      "sonotrack build --system",
+                      "sonotrack build --portable --out build/portable-fmus"])
     build.add_argument("names", nargs="*", help="FMU names (default: all)")
     build.add_argument("--out", default="fmus", help="output folder (default: fmus)")
     build.add_argument("--system", action="store_true",
                        help="also build TrackingSystem.fmu: the whole loop of --scenario in one "
                             "FMU, from the five FMUs in --out (docs/system_fmu.md)")
+    build.add_argument("--portable", action="store_true",
+                       help="each FMU carries its own Python runtime (libpython, the standard "
+                            "library it needs, numpy; under 20 MB) and runs where no Python is "
+                            "installed (docs/fmi_binary.md, 'Portable FMUs')")
     build.add_argument("--scenario", default=None,
                        help=f"with --system: TOML file or shipped scenario name whose schedule "
                             f"and parameter values it runs (default: {DEFAULT_SCENARIO})")

@@ -50,7 +50,7 @@ def private_package_name(name, tag):
 
 
 def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(),
-              resources=(), notes_file=None):
+              resources=(), notes_file=None, portable=False):
     """Build one FMU and return the path of the ``.fmu`` file.
 
     Parameters
@@ -71,6 +71,9 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
         pythonfmu builds, where the slave finds them as its ``resources``).
     notes_file : path-like, optional
         The notes of ``documentation/index.html``; default ``docs/<sub-package>.md``.
+    portable : bool, optional
+        Carry a Python runtime (:mod:`orchestrator.builder.portable`): the FMU runs where no
+        Python is installed.
 
     Returns
     -------
@@ -121,6 +124,10 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
             _forget_modules(name, private)
     _check_built(Path(fmu_path), name)
     install_binary(fmu_path, private, name, name)
+    if portable:
+        from orchestrator.builder.portable import make_portable
+
+        make_portable(fmu_path)
     # last: metadata and documentation/index.html from the final modelDescription.xml
     document_fmu(fmu_path, slave_file,
                  notes_file or components_dir.parent / "docs" / f"{subpackage}.md")
@@ -163,12 +170,13 @@ def entry_script(slave_source, private, subpackage):
     return source
 
 
-def build_all(dest_dir, names=None, components_dir=COMPONENTS):
-    """Build several FMUs (default: every FMU whose slave exists) and return their paths."""
+def build_all(dest_dir, names=None, components_dir=COMPONENTS, portable=False):
+    """Build several FMUs (default: every FMU whose slave exists) and return their paths
+    (``portable``: each carries a Python runtime, see :func:`build_fmu`)."""
     if names is None:
         names = [n for n, pkg in FMU_PACKAGES.items()
                  if (Path(components_dir) / pkg / "fmu.py").is_file()]
-    return [build_fmu(name, dest_dir, components_dir) for name in names]
+    return [build_fmu(name, dest_dir, components_dir, portable=portable) for name in names]
 
 
 def _check_built(fmu_path, name):

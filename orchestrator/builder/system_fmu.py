@@ -24,7 +24,7 @@ SYSTEM_NOTES = REPO_ROOT / "docs" / "system_fmu.md"
 _SYSTEM_PACKAGE = "system"
 
 
-def build_system_fmu(description, dest_dir, components_dir=COMPONENTS):
+def build_system_fmu(description, dest_dir, components_dir=COMPONENTS, portable=False):
     """Build ``TrackingSystem.fmu`` running ``description`` and return its path.
 
     Parameters
@@ -35,6 +35,8 @@ def build_system_fmu(description, dest_dir, components_dir=COMPONENTS):
         Folder the FMU is written to (created if missing).
     components_dir : path-like, optional
         The ``components`` package to take the slaves and cores from.
+    portable : bool, optional
+        Carry a Python runtime (:func:`orchestrator.builder.fmus.build_fmu`).
 
     Returns
     -------
@@ -56,7 +58,7 @@ def build_system_fmu(description, dest_dir, components_dir=COMPONENTS):
         carried.write_text(description.to_json(), encoding="utf-8")
         return build_fmu(SYSTEM_MODEL, dest_dir, components_dir,
                          packages={SYSTEM_MODEL: _SYSTEM_PACKAGE}, bundle=description.packages,
-                         resources=[carried], notes_file=SYSTEM_NOTES)
+                         resources=[carried], notes_file=SYSTEM_NOTES, portable=portable)
 
 
 def code_mismatches(fmus, components_dir=COMPONENTS):

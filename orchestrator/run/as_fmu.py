@@ -74,7 +74,7 @@ def system_description(plan):
         links=tuple((str(c.start), str(c.end)) for c in system.connections), **positions)
 
 
-def build_scenario_fmu(scenario, dest_dir, fmu_dir=None, allow_outside=False):
+def build_scenario_fmu(scenario, dest_dir, fmu_dir=None, allow_outside=False, portable=False):
     """Build ``TrackingSystem.fmu`` running ``scenario`` (as ``sonotrack run`` would).
 
     Parameters
@@ -88,6 +88,8 @@ def build_scenario_fmu(scenario, dest_dir, fmu_dir=None, allow_outside=False):
         descriptions give the ports and the stepping order; the system FMU carries the code).
     allow_outside : bool
         Let the scenario and system files name files outside their folders.
+    portable : bool
+        Carry a Python runtime in the FMU (``sonotrack build --portable``).
 
     Returns
     -------
@@ -114,4 +116,4 @@ def build_scenario_fmu(scenario, dest_dir, fmu_dir=None, allow_outside=False):
         raise BuildError("the system FMU would run other code than sonotrack run with these "
                          "FMUs; rebuild them (`sonotrack build --system` builds both): "
                          + "; ".join(stale))
-    return build_system_fmu(description, Path(dest_dir))
+    return build_system_fmu(description, Path(dest_dir), portable=portable)

@@ -27,7 +27,8 @@ from orchestrator.files.atomic import atomic_open
 from .carried_pythonfmu import carry, installed_runtime
 
 __all__ = ["LIBRARY", "LOCK_LIBRARY", "SOURCES", "BINDING_FILE", "build_tag", "source_hash", "library_source_hash",
-           "install_binary", "binding_table", "pythonfmu_binary", "restore_pythonfmu_binary"]
+           "install_binary", "binding_table", "pythonfmu_binary", "restore_pythonfmu_binary",
+           "edit_archive"]
 
 HERE = Path(__file__).resolve().parent
 LIBRARY = HERE / "linux64" / "sonotrack_fmi2.so"
@@ -170,7 +171,7 @@ def install_binary(fmu_path, package, entry, class_name, library=LIBRARY):
         files[f"binaries/linux64/{lock.name}"] = lock.read_bytes()
         files[BINDING_FILE] = table
 
-    _rewrite(fmu_path, edit)
+    edit_archive(fmu_path, edit)
     return fmu_path
 
 
@@ -195,7 +196,7 @@ def restore_pythonfmu_binary(fmu_path):
         files.pop(f"binaries/linux64/{LOCK_LIBRARY.name}", None)
         files.pop(BINDING_FILE, None)
 
-    _rewrite(fmu_path, edit)
+    edit_archive(fmu_path, edit)
     return fmu_path
 
 
@@ -209,18 +210,20 @@ def _description(fmu_path):
     return description, identifier
 
 
-def _rewrite(fmu_path, edit):
+def edit_archive(fmu_path, edit, compresslevel=None):
     """Rewrite the zip atomically: ``edit`` changes a dict of its files (name to bytes) in place.
 
-    Every entry is deflated (pythonfmu stores most of them); an entry that stays keeps its
-    metadata, a new one is readable by everyone (executable for a library).
+    Every entry is deflated (pythonfmu stores most of them; ``compresslevel`` as zipfile's,
+    default 6); an entry that stays keeps its metadata, a new one is readable by everyone
+    (executable for a library).
     """
     with zipfile.ZipFile(fmu_path) as archive:
         infos = {info.filename: info for info in archive.infolist()}
         files = {name: archive.read(info) for name, info in infos.items()}
     edit(files)
     with (atomic_open(fmu_path, fsync=False) as stream,
-          zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED) as archive):
+          zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED,
+                          compresslevel=compresslevel) as archive):
         for name, data in files.items():
             info = infos.get(name)
             if info is None:

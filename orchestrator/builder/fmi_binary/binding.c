@@ -28,8 +28,31 @@ void free_binding(Binding *b, int python_alive) {
     }
     free(b->vars);
     free(b->guid); free(b->libpython); free(b->python); free(b->python_version);
-    free(b->package); free(b->entry); free(b->class_name);
+    free(b->package); free(b->entry); free(b->class_name); free(b->runtime);
     memset(b, 0, sizeof *b);
+}
+
+/* The optional runtime line names a folder relative to the FMU's root (the folder above the
+ * table's resources/): made absolute here; a name that climbs out of the FMU is refused. */
+static int runtime_folder(const char *table, Binding *b, char *error, size_t size) {
+    if (b->runtime[0] == '/' || strstr(b->runtime, "..") != NULL) {
+        snprintf(error, size, "%.900s: runtime %.200s is not a folder inside the FMU", table,
+                 b->runtime);
+        return -1;
+    }
+    char *root = strdup(table);
+    if (root == NULL) return -1;
+    for (int up = 0; up < 2; up++) { /* <root>/resources/sonotrack_binding.txt -> <root> */
+        char *slash = strrchr(root, '/');
+        if (slash != NULL) *slash = '\0';
+        else root[0] = '\0';
+    }
+    char *folder = malloc(strlen(root) + strlen(b->runtime) + 2);
+    if (folder != NULL) sprintf(folder, "%s/%s", root[0] ? root : ".", b->runtime);
+    free(root);
+    free(b->runtime);
+    b->runtime = folder;
+    return folder != NULL ? 0 : -1;
 }
 
 int read_binding(const char *path, Binding *b, char *error, size_t size) {
@@ -65,6 +88,7 @@ int read_binding(const char *path, Binding *b, char *error, size_t size) {
         else if (n == 2 && strcmp(fields[0], "package") == 0) slot = &b->package;
         else if (n == 2 && strcmp(fields[0], "entry") == 0) slot = &b->entry;
         else if (n == 2 && strcmp(fields[0], "class") == 0) slot = &b->class_name;
+        else if (n == 2 && strcmp(fields[0], "runtime") == 0) slot = &b->runtime;
         if (slot != NULL) {
             free(*slot);
             if ((*slot = strdup(fields[1])) == NULL) { failed = 1; break; }
@@ -109,7 +133,7 @@ int read_binding(const char *path, Binding *b, char *error, size_t size) {
                  "entry, class", path);
         return -1;
     }
-    return 0;
+    return b->runtime != NULL ? runtime_folder(path, b, error, size) : 0;
 }
 
 /* file:///a%20b/resources -> /a b/resources (no trailing slash). */

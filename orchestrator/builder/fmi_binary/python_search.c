@@ -3,9 +3,11 @@
  *   1. SONOTRACK_PYTHON and/or SONOTRACK_LIBPYTHON (when either is set, only they are tried:
  *      an explicit choice is never passed over); libpython is derived from SONOTRACK_PYTHON
  *      when only that is set;
- *   2. the Python and libpython recorded at build (resources/sonotrack_binding.txt);
- *   3. python3.<build minor> and python3 on PATH (every match, in PATH order);
- *   4. the standard libpython locations (/usr/lib/x86_64-linux-gnu, /usr/lib64, /usr/local/lib,
+ *   2. the runtime a portable FMU carries (the binding table's runtime folder: its libpython,
+ *      standard library and numpy, checked like any installation);
+ *   3. the Python and libpython recorded at build (resources/sonotrack_binding.txt);
+ *   4. python3.<build minor> and python3 on PATH (every match, in PATH order);
+ *   5. the standard libpython locations (/usr/lib/x86_64-linux-gnu, /usr/lib64, /usr/local/lib,
  *      /usr/lib), for the build's minor version and the three after it.
  *
  * A candidate is checked from its files, before anything is loaded: the libpython exists and
@@ -85,16 +87,23 @@ static int minor_in_name(const char *path, const char *stem) {
     return end == base + n + 2 || minor < 0 || minor > 99 ? -1 : (int)minor;
 }
 
+/* <folder>/<module>.py or, sourceless, .pyc (a runtime carried in an FMU). */
+static int exists_py(const char *folder, const char *module) {
+    char path[PATH_MAX];
+    pathf(path, "%s/%s.py", folder, module);
+    if (exists(path)) return 1;
+    pathf(path, "%s/%s.pyc", folder, module);
+    return exists(path);
+}
+
 /* The standard library of Python 3.<minor> under prefix: os.py, encodings, lib-dynload. */
 static int has_stdlib(const char *prefix, int minor) {
     static const char *const libs[] = {"lib", "lib64"};
     for (size_t i = 0; i < 2; i++) {
         char base[PATH_MAX], path[PATH_MAX];
         pathf(base, "%s/%s/python3.%d", prefix, libs[i], minor);
-        join(path, base, "os.py");
-        if (!exists(path)) continue;
-        join(path, base, "encodings/__init__.py");
-        if (!exists(path)) continue;
+        if (!exists_py(base, "os")) continue;
+        if (!exists_py(base, "encodings/__init__")) continue;
         join(path, base, "lib-dynload");
         if (exists(path)) return 1;
     }
@@ -105,8 +114,8 @@ static int has_stdlib(const char *prefix, int minor) {
  * 0 absent, -1 present but built for another Python. */
 static int numpy_in(const char *site, int minor) {
     char path[PATH_MAX], tag[64];
-    pathf(path, "%s/numpy/__init__.py", site);
-    if (!exists(path)) return 0;
+    pathf(path, "%s/numpy", site);
+    if (!exists_py(path, "__init__")) return 0;
     snprintf(tag, sizeof tag, "_multiarray_umath.cpython-3%d", minor);
     static const char *const cores[] = {"numpy/_core", "numpy/core"}; /* numpy 2, numpy 1 */
     for (size_t i = 0; i < 2; i++) {
@@ -363,8 +372,15 @@ int find_python(const Binding *b, const char *loaded, PythonChoice *choice, char
         chosen = judge(s, origin, python, library, choice) == 1;
     } else {
         note(s, "SONOTRACK_PYTHON, SONOTRACK_LIBPYTHON: not set");
-        chosen = judge(s, "recorded at build", b->python[0] ? b->python : NULL,
-                       b->libpython[0] ? b->libpython : NULL, choice) == 1;
+        if (b->runtime != NULL) {
+            char file[PATH_MAX];
+            pathf(file, "%s/lib/libpython3.%d.so.1.0", b->runtime, s->build_minor);
+            chosen = judge(s, "carried in the FMU", NULL, file, choice) == 1;
+        } else {
+            note(s, "carried in the FMU: none (not a portable build)");
+        }
+        chosen = chosen || judge(s, "recorded at build", b->python[0] ? b->python : NULL,
+                                 b->libpython[0] ? b->libpython : NULL, choice) == 1;
         char name[32];
         snprintf(name, sizeof name, "python3.%d", s->build_minor);
         chosen = chosen || from_path(s, name, choice) || from_path(s, "python3", choice);
@@ -384,7 +400,12 @@ int find_python(const Binding *b, const char *loaded, PythonChoice *choice, char
                  "/usr/lib): no libpython3.%d to 3.%d", s->build_minor,
                  s->build_minor + LATER_MINORS);
     }
-    if (!chosen)
+    if (!chosen && b->runtime != NULL && loaded == NULL && !python && !library)
+        snprintf(error, size, "no Python 3.%d or newer with numpy to run this FMU in a host that "
+                 "runs no Python; tried: %s. Fix: this FMU carries its own Python in %.1000s: "
+                 "unzip the whole FMU again (a file of it is missing or changed), or build it "
+                 "again with `sonotrack build --portable`", s->build_minor, places, b->runtime);
+    else if (!chosen)
         snprintf(error, size, "no Python 3.%d or newer with numpy to run this FMU in a host that "
                  "runs no Python; tried: %s. Fix: install Python 3.%d with numpy (Debian/Ubuntu: "
                  "apt-get install libpython3.%d python3-numpy), or set SONOTRACK_PYTHON to a "

@@ -118,6 +118,7 @@ typedef struct {
 
 typedef struct {
     char *guid, *libpython, *python, *python_version, *package, *entry, *class_name;
+    char *runtime; /* absolute folder of the Python runtime a portable FMU carries, or NULL */
     Variable *vars; /* indexed by value reference */
     size_t nvars;
 } Binding;

@@ -8,61 +8,32 @@ The same FMU with the library gcc builds for this machine's glibc does not even 
 which is what every FMU did before the glibc floor.
 """
 
-import os
 import shutil
 import subprocess
 import sys
-import uuid
-from pathlib import Path
 
 import pytest
 
 from orchestrator.builder.fmi_binary import HERE, LOCK_LIBRARY, SOURCES
-from tests.support.fmi_binary import C_HOST_SOURCE, fmi_headers, plan
+from tests.support.debian_roots import debian_root, folder_inside, host_for_glibc_2_17, run_in_root
+from tests.support.fmi_binary import fmi_headers, plan
 
 pytestmark = pytest.mark.integration
 
-ROOT = Path(os.environ.get("SONOTRACK_DEBIAN11_ROOT") or
-            Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") /
-            "sonotrack" / "roots" / "debian11")
-ZIG = Path(sys.executable).parent / "python-zig"
 NAME = "WheelController"
 
 
 @pytest.fixture(scope="module")
 def debian11():
     """The root, checked to be Debian 11 with glibc 2.31 and no Python."""
-    if not (ROOT / ".complete").exists():
-        pytest.skip(f"no Debian 11 root at {ROOT}: `make debian11-root` makes one (as root, "
-                    f"with debootstrap from Debian)")
-    if os.geteuid() != 0 or shutil.which("chroot") is None:
-        pytest.skip("chroot is not installed or we are not root")
-    assert (ROOT / "etc" / "debian_version").read_text().startswith("11.")
-    assert (ROOT / "lib" / "x86_64-linux-gnu" / "libc-2.31.so").exists()
-    pythons = [p for folder in ("usr/bin", "usr/local/bin", "usr/lib/x86_64-linux-gnu", "usr/lib")
-               for p in (ROOT / folder).glob("*python3*")]
-    assert not pythons, pythons
-    return ROOT
+    return debian_root(11)
 
 
 @pytest.fixture
 def inside(debian11):
     """A fresh folder inside the root: (its path on this machine, its path in the root)."""
-    name = f"sonotrack-test-{uuid.uuid4().hex[:8]}"
-    folder = debian11 / "tmp" / name
-    folder.mkdir(parents=True)
-    yield folder, Path("/tmp") / name
-    shutil.rmtree(folder)
-
-
-def _host_for_glibc_2_17(folder):
-    if not ZIG.exists():
-        pytest.skip(f"{ZIG} is missing: `make` installs ziglang into the venv")
-    host = folder / "fmi_host"
-    subprocess.run([str(ZIG), "cc", "-target", "x86_64-linux-gnu.2.17", "-std=c11", "-O1",
-                    "-Wall", "-Werror", f"-I{fmi_headers()}", "-o", str(host), str(C_HOST_SOURCE),
-                    "-ldl", "-pthread"], check=True, capture_output=True, text=True, timeout=600)
-    return host
+    with folder_inside(debian11) as folders:
+        yield folders
 
 
 def _run_in_root(debian11, inside, extracted, library=None):
@@ -71,12 +42,9 @@ def _run_in_root(debian11, inside, extracted, library=None):
     shutil.copytree(extracted[NAME][0], folder / NAME)
     if library is not None:
         shutil.copy(library, folder / NAME / "binaries" / "linux64" / f"{NAME}.so")
-    _host_for_glibc_2_17(folder)
+    host_for_glibc_2_17(folder)
     text, _ = plan(None, [(NAME, in_root / NAME, extracted[NAME][1], "old")], 1)
-    return subprocess.run([shutil.which("chroot"), str(debian11), str(in_root / "fmi_host")],
-                          input=text,
-                          capture_output=True, text=True, timeout=300,
-                          env={"PATH": "/usr/local/bin:/usr/bin:/bin", "HOME": "/root"})
+    return run_in_root(debian11, in_root, text)
 
 
 def test_in_debian_11_without_python_the_library_loads_and_refuses_with_one_line(
