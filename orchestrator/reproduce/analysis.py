@@ -9,7 +9,7 @@ from orchestrator.reproduce.geometry import tangent_arc_path
 from .experiments import TABLE13_TARGET
 from .following import following_figures
 from .measures import arrival_figures, fix_figures, tracking_figures, wheel_profile
-from .statistics import mean_interval, paired_difference
+from .statistics import evidence, paired_difference
 
 __all__ = ["START", "START_HEADING", "CASE_TARGETS", "Analysis", "reference_path"]
 
@@ -90,9 +90,11 @@ class Analysis:
         return values
 
     def estimate(self, cell, key, scale=1.0, segment=None):
-        """Mean and interval of a figure over a cell's runs."""
-        return mean_interval([None if v is None else scale * v
-                              for v in self.values(cell, key, segment)])
+        """Interval of a figure over a cell's runs, by the claims' rule
+        (:func:`~orchestrator.reproduce.statistics.evidence`): the t-interval of the mean, or
+        the median's rank-based interval where runs gave no value or the values separate."""
+        return evidence([None if v is None else scale * v
+                         for v in self.values(cell, key, segment)]).estimate
 
     def difference(self, cell_a, cell_b, key):
         """Interval of the mean paired difference a - b of a figure."""

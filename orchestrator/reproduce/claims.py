@@ -17,60 +17,81 @@ import numpy as np
 
 from orchestrator.files.json_policy import json_ready
 
-from .statistics import mean_interval
+from .statistics import evidence
+from .verdicts import (CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER,  # noqa: F401
+                       classify)
 
-__all__ = ["SUPPORTED", "WEAKER", "NO_EFFECT", "CONTRADICTED", "INCONCLUSIVE", "Judgement",
-           "judge_claim", "Claim", "MECHANISMS", "CONTROL_MECHANISMS",
+__all__ = ["Judgement", "judge_claim", "Claim", "MECHANISMS", "CONTROL_MECHANISMS",
            "MOTION_MECHANISMS", "TRACKING_MECHANISMS", "mechanism_figures", "mechanism_text", "paired_at_arrival",
            "per_run_slopes"]
 
 
-SUPPORTED, WEAKER, NO_EFFECT = "supported", "weaker than claimed", "no effect"
-CONTRADICTED, INCONCLUSIVE = "contradicted", "inconclusive"
-
-
 @dataclass(frozen=True)
 class Judgement:
-    """How a claim fares: the interval it was read from, the verdict and its numbers."""
+    """How a claim fares: the evidence (interval, rule, sign test, lost runs) and the verdict
+    (:func:`~orchestrator.reproduce.verdicts.classify`)."""
 
-    category: str
-    estimate: object
-    interval_rule: str
-    sign_test: dict
-    ratio: float
-    threshold: float
-    margin: float
-    paper: float
-    claimed: str
+    evidence: object
+    verdict: object
+    paper_note: str = ""
+
+    @property
+    def category(self):
+        return self.verdict.category
+
+    @property
+    def estimate(self):
+        return self.evidence.estimate
+
+    @property
+    def interval_rule(self):
+        return self.evidence.rule
+
+    @property
+    def sign_test(self):
+        sign = self.evidence.sign
+        return {"plus": sign.positive, "minus": sign.negative, "ties": sign.ties,
+                "p_value": sign.p_value}
+
+    @property
+    def ratio(self):
+        return self.verdict.ratio
 
     def rule_text(self, unit=""):
-        """The rule's numbers, e.g. ``"below 0 m; no effect within +-0.0102 m"``."""
-        text = f"{self.claimed} {self.threshold:.4g} {unit}".rstrip()
-        if self.margin:
-            text += f"; no effect within +-{self.margin:.3g} {unit}".rstrip()
-        return text
+        """The rule's numbers and the one that decided, e.g. ``"below 0 m; no effect within
+        +-0.0102 m; ..."``."""
+        unit = f" {unit}" if unit else ""
+        v = self.verdict
+        text = f"{v.claimed} {v.threshold:.4g}{unit}"
+        if v.margin:
+            text += f"; no effect within +-{v.margin:.3g}{unit}"
+        if v.paper is not None:
+            text += f"; supported needs >= {v.support_fraction:g} x the paper's {v.paper:.3g}"
+        if self.paper_note:
+            text += f"; {self.paper_note}"
+        return f"{text}. Decided: {v.rule}"
 
 
-def judge_claim(samples, claimed, paper=None, threshold=0.0, margin=None, failures=0):
-    """Interim verdict (to be replaced by the verdicts module): t-interval rule."""
-    estimate = mean_interval(samples)
-    margin = 0.0 if margin is None else float(margin)
-    sign = 1.0 if claimed == "above" else -1.0
-    low, high = sorted((sign * (estimate.low - threshold), sign * (estimate.high - threshold)))
-    mean = sign * (estimate.mean - threshold)
-    ratio = (estimate.mean - threshold) / paper if paper else None
-    if estimate.n < 2 or not (math.isfinite(low) and math.isfinite(high)):
-        category = INCONCLUSIVE
-    elif high < -margin:
-        category = CONTRADICTED
-    elif margin and -margin <= low and high <= margin:
-        category = NO_EFFECT
-    elif low > 0:
-        category = (SUPPORTED if paper is None or mean >= 0.5 * abs(paper) else WEAKER)
-    else:
-        category = INCONCLUSIVE
-    return Judgement(category, estimate, "Student-t interval of the mean", {}, ratio,
-                     threshold, margin, paper, claimed)
+def judge_claim(samples, claimed, paper=None, threshold=0.0, margin=None):
+    """The evidence and verdict of one claim.
+
+    ``paper`` is the paper's own value of the measure (signed, e.g. its difference of two
+    printed numbers); its magnitude in the claimed direction is what the verdict compares
+    with. A paper value on the other side of the threshold (the paper's own numbers do not
+    show what it claims) is not a magnitude: the claim is then judged on its direction alone,
+    and the rule says why.
+    """
+    found = evidence(samples, center=threshold)
+    magnitude, note = None, ""
+    if paper is not None and math.isfinite(paper):
+        signed = (paper - threshold) * (1.0 if claimed == "above" else -1.0)
+        if signed > 0:
+            magnitude = signed
+        else:
+            note = f"the paper's own value {paper:.3g} is not on the claimed side"
+    verdict = classify(found.estimate, magnitude, claimed, threshold,
+                       margin=0.0 if margin is None else float(margin))
+    return Judgement(found, verdict, note)
 
 
 @dataclass
@@ -134,8 +155,7 @@ class Claim:
         """The :class:`~orchestrator.reproduce.verdicts.Judgement` (computed once)."""
         if self._judged is None:
             self._judged = judge_claim(self.samples, self.claimed, self.paper,
-                                                threshold=self.threshold, margin=self.margin,
-                                                failures=self.failures)
+                                       threshold=self.threshold, margin=self.margin)
         return self._judged
 
     @property

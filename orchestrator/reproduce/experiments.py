@@ -38,10 +38,12 @@ TABLE13_V_MAX = 0.6
 # The paper's robot drives to the target (Table 2's distances are whole quarter circles), so
 # the planner stops at the heard target itself (Tables 1-3 and 8-9).
 STOP_DISTANCE = 0.0
-# Sec. 6.2 runs until the source has ended its path (31 s straight, 33.3 s S-curve) and the
-# robot has stopped; the scenarios' planner stop_distance (0.5 m) is kept: the paper mutes
-# the source "to prevent collisions".
-TRACK_STOP_TIME = 40.0
+# Sec. 6.2 runs until the source has ended its path and the robot has stopped, by start: from
+# 1 m the source mutes at 27.5 s (straight) / 30.0 s (S-curve), from 3 m at 20.4 / 23.6 s, and
+# the last robot (rotate then go) stopped 4.0 / 4.8 s later in a probe study (2 runs per cell);
+# each stop time is the S-curve's mute plus 8 s, whole seconds. The scenarios' planner
+# stop_distance (0.5 m) is kept: the paper mutes the source "to prevent collisions".
+TRACK_STOP_TIME = {"start_1m": 38.0, "start_3m": 32.0}
 # Sec. 6.2: "when the initial sound source was located at 45 deg to the right of the robot".
 # The distance is not printed. The study starts the source at two distances on that bearing:
 # 1 m (the shipped scenarios' start) and 3 m, the farthest whose straight path still leaves
@@ -274,7 +276,7 @@ def plan(selected, speeds, pd_gains=(3.5, 1.15), room=None):
             x0, y0 = sec62_source_start(distance)
             experiment = Experiment(
                 f"sec6_2_{start}", f"Sec. 6.2, straight and S-curve, source {distance:g} m "
-                "at 45 deg right", "s_curve.toml", TRACK_STOP_TIME,
+                "at 45 deg right", "s_curve.toml", TRACK_STOP_TIME[start],
                 {"source.x0": x0, "source.y0": y0, "source.length": SEC62_SOURCE_END_Y - y0})
             for path in ("straight", "s_curve"):
                 for mode, arm in SEC62_ARMS:
@@ -346,7 +348,8 @@ def configuration(pd_gains=(3.5, 1.15), room=None):
                    "straight or S-curve path at 0.2 m/s until y = "
                    f"{SEC62_SOURCE_END_Y:g} m (0.5 m short of the far wall of the paper's 7 m "
                    "room) and mutes at the end; planner stop distance 0.5 m; "
-                   f"{TRACK_STOP_TIME:g} s; arms: curvature with CFGS-PD (default form), "
+                   + " or ".join(f"{t:g} s" for t in TRACK_STOP_TIME.values())
+                   + "; arms: curvature with CFGS-PD (default form), "
                    "rotate then go with CFGS-PD, curvature with CPID",
         "acoustics": ("free field (the localizer's default) for every experiment" if room is None
                       else "free field for every experiment; Tables 1-3 and Sec. 6.2 (Figs. "

@@ -119,7 +119,8 @@ def _tracking(study, out, case, number, ff="ff_on", mu=NOMINAL_FRICTION):
                   "and CFGS-PD as printed, their distance from the ideal path and its paired "
                   "difference",
                   save(fig, out / name),
-                  ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"])
+                  ["ideal", _LABEL["cpid"], _LABEL["fgs_pd_paper"],
+                   f"{_LABEL['fgs_pd_paper']} - CPID"])
 
 
 def _wheel(study, out, cells, number, title, name, slip=True):
@@ -169,8 +170,10 @@ def _wheel(study, out, cells, number, title, name, slip=True):
 def _comparison(analysis, out):
     """Fig. 17: error at arrival and path RMSE of both cases, every arm and condition.
 
-    A symmetric-log axis (linear within 1 mm of zero): the figures span mm to m, and an
-    interval that reaches zero or below is drawn as it is, never clipped or hidden.
+    Each point is the cell's estimate by the claims' rule (mean and t-interval, or median and
+    its rank-based interval where runs never arrived or the values separate). A symmetric-log
+    axis (linear within 1 mm of zero): the figures span mm to m, and an interval that reaches
+    zero or below is drawn as it is, never clipped or hidden.
     """
     plt = pyplot()
     if not analysis.has(t89_cell("static", "cpid", "ff_on", NOMINAL_FRICTION)):
@@ -201,7 +204,7 @@ def _comparison(analysis, out):
                 x += 1
         ax.set_xticks(range(len(labels)), labels, fontsize=7)
         ax.set_yscale("symlog", linthresh=1e-3)
-        ax.set(title=f"Fig. 17: {title}, mean and 95 % interval", ylabel=title)
+        ax.set(title=f"Fig. 17: {title}, estimate and 95 % interval", ylabel=title)
         ax.grid(True, alpha=0.3, which="both")
         if drawn:
             ax.legend(fontsize=7, ncol=3)

@@ -19,7 +19,7 @@ from orchestrator.report.document import Code, Column, Document, Strong, Verdict
 from orchestrator.report.html import write_html
 from orchestrator.report.markdown import write_markdown
 
-from .claims import CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER
+from .verdicts import CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER
 from .statistics import CONFIDENCE, Estimate
 
 __all__ = ["Table", "Comparison", "Figure", "Report", "VERDICTS", "VERDICT_TONES"]
@@ -84,16 +84,9 @@ def _effect(claim):
 
 
 def _statistics(claim):
-    """The interval's rule, the sign test and the lost runs, as text."""
-    judged = claim.judged
-    parts = [judged.interval_rule]
-    sign = judged.sign_test
-    if sign:
-        parts.append(f"sign test {sign['plus']}+/{sign['minus']}-"
-                     + (f"/{sign['ties']}=" if sign.get("ties") else "")
-                     + f", p = {sign['p_value']:.2g}")
-    parts.append(f"{claim.failures} lost" if claim.failures else "none lost")
-    return "; ".join(parts)
+    """The sign test, failed and lost runs and the interval's rule, as text."""
+    found = claim.judged.evidence
+    return found.text() + (f" ({found.rule})" if found.method == "median" else "")
 
 
 _CLAIM_COLUMNS = ["source", "claim", "condition", "against", "measure", "ours, paper (ratio)",

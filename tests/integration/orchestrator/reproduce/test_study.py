@@ -17,20 +17,24 @@ pytestmark = pytest.mark.integration
 
 RTG = "rotate then go (without curvature)"
 
+PRINTED, DEFAULT = "CFGS-PD as printed", "CFGS-PD default form"
+ARMS = ["CPID", PRINTED, DEFAULT, "fixed PD at the median schedule point"]
 FIGURES = {
     "fig07_straight_curvature.png": ["source path", "curvature", RTG],
     "fig08_scurve_curvature.png": ["source path", "curvature", RTG],
-    "fig13_static_tracking.png": ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"],
-    "fig14_static_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
-    "fig15_dynamic_tracking.png": ["ideal", "CPID", "CFGS-PD", "CFGS-PD - CPID"],
-    "fig16_dynamic_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
-    "fig17_static_dynamic_comparison.png": ["CPID", "CFGS-PD"],
+    "fig13_static_tracking.png": ["ideal", "CPID", PRINTED, f"{PRINTED} - CPID"],
+    "fig14_static_left_wheel.png": ["CPID", PRINTED, "slip"],
+    "fig14_static_left_wheel_mu005.png": ["CPID", PRINTED, "slip"],
+    "fig15_dynamic_tracking.png": ["ideal", "CPID", PRINTED, f"{PRINTED} - CPID"],
+    "fig16_dynamic_left_wheel.png": ["CPID", PRINTED, "slip"],
+    "fig16_dynamic_left_wheel_mu005.png": ["CPID", PRINTED, "slip"],
+    "fig17_static_dynamic_comparison.png": ARMS,
     "fig23_straight_tracking.png": ["source", "robot", "gap"],
-    "fig24_straight_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig24_straight_left_wheel.png": ["CPID", DEFAULT, "slip"],
     "fig25_straight_estimates.png": ["true", "heard"],
     "fig26_straight_distance_angle.png": ["true", "heard"],
     "fig27_scurve_tracking.png": ["source", "robot", "gap"],
-    "fig28_scurve_left_wheel.png": ["CPID", "CFGS-PD", "slip"],
+    "fig28_scurve_left_wheel.png": ["CPID", DEFAULT, "slip"],
     "fig29_scurve_estimates.png": ["true", "heard"],
     "fig30_scurve_distance_angle.png": ["true", "heard"],
     "table1_3_speed_trends.png": [RTG, "curvature"],
@@ -74,11 +78,16 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
     data = json.loads((out / "reproduction.json").read_text())
     assert set(data["tables"]) == {"conditions", "table1", "table2", "table3", "table6",
                                    "table7", "table8", "table9", "sec6_2"}
-    assert {c["verdict"] for c in data["claims"]} <= {"supported", "not supported",
-                                                       "inconclusive"}
-    assert all(c["requirement"][0] in "<>" for c in data["claims"])
-    # every printed number of Tables 1-3 (2 speeds), 6-7 and 8-9 (nominal friction, both
-    # feedforward settings; CPID, CFGS-PD with its integral trim and as pure PD) has a ratio row
+    assert {c["verdict"] for c in data["claims"]} <= {
+        "supported", "weaker than claimed", "no effect", "contradicted", "inconclusive"}
+    assert all(c["requirement"].startswith(("below", "above")) for c in data["claims"])
+    # each claim names its comparator and a reason measured in its cells
+    assert all(c["comparator"] and c["reason"] for c in data["claims"])
+    # the tally counts the paper's claims only; design comparisons are listed apart
+    assert sum(data["verdicts"].values()) == sum(1 for c in data["claims"] if c["tally"])
+    assert any(not c["tally"] for c in data["claims"])
+    # every printed number of Tables 1-3 (2 speeds), 6-7 and 8-9 (nominal friction; CPID with
+    # both readings of its ki and CFGS-PD as printed, feedforward on and off) has a ratio row
     per_table = {}
     for row in data["paper_ratios"]:
         per_table[row["table"]] = per_table.get(row["table"], 0) + 1
@@ -87,10 +96,12 @@ def test_reports_hold_tables_verdicts_ratios_and_no_absolute_path(study):
     # Table 6 from the simulated wheels: every row has a simulated mean beside the paper's
     assert all(row["ratio"] is not None for row in data["paper_ratios"]
                if row["table"] == "Table 6")
-    # 36 free-field cells, and Tables 1-3 (2 speeds x 2 modes) and Sec. 6.2 (6) in the room
-    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 46
+    # 70 free-field cells (Tables 1-3: 4, 6-7: 2, 8-9: 52, Sec. 6.2: 12), and Tables 1-3 and
+    # Sec. 6.2 in the room (16)
+    assert data["settings"]["runs_per_cell"] == 2 and data["settings"]["cells"] == 86
     assert data["settings"]["conditions"] == ["free_field", "room"]
-    assert "integral trim" in data["configuration"]["pd_form"]
+    kp, kd = data["settings"]["fixed_pd_gains"]
+    assert 3.0 <= kp <= 4.0 and 0.3 <= kd <= 2.0     # inside the schedule's boxes
     text = (out / "reproduction.md").read_text() + (out / "reproduction.json").read_text()
     assert str(out) not in text and "/tmp" not in text
     assert not [s for s in _strings(data) if s.startswith("/")]
@@ -128,9 +139,10 @@ def test_every_fix_dependent_claim_is_judged_in_both_conditions_side_by_side(stu
     fix_dependent = [c for c in report.claims
                      if c.source.startswith(("Table 1", "Table 2", "Table 3", "Sec. 3.6",
                                              "Sec. 6.2", "Figs. 7-8"))]
-    # Tables 1-2: four slopes; Table 3: one per speed (2); Sec. 6.2: six per path, and the
-    # S-curve's inside claim
-    assert len(data["claims"]) == len(fix_dependent) == 4 + 2 + 2 * 6 + 1
+    # Tables 1-2: four slopes; Table 3: one per speed (2); Sec. 6.2 per start (2): three
+    # bounds per arm (3) and path (2), the S-curve's inside claim per arm, Figs. 7-8's two
+    # metrics and the slip claim per path
+    assert len(data["claims"]) == len(fix_dependent) == 4 + 2 + 2 * (3 * 3 * 2 + 3 + 2 * 3)
     assert all(p["free_field"] and p["room"] for p in data["claims"])
     assert data["room"]["parameters"]["localizer.room"] is True
     assert data["room"]["parameters"]["localizer.rt60"] == 0.4

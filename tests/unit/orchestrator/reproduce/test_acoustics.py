@@ -15,7 +15,8 @@ from orchestrator.reproduce.acoustics import Room, check_room_fits, load_room, r
 
 ROOM_TOML = Path(__file__).resolve().parents[4] / "scenarios" / "room.toml"
 # The experiments whose claims rest on the fixes (issue 22, item 4), and nothing else.
-ROOM_EXPERIMENTS = {f"table13_v{v:g}_room" for v in PAPER_SPEEDS} | {"sec6_2_room"}
+ROOM_EXPERIMENTS = ({f"table13_v{v:g}_room" for v in PAPER_SPEEDS}
+                    | {"sec6_2_start_1m_room", "sec6_2_start_3m_room"})
 
 
 def _room_file():
@@ -80,7 +81,7 @@ def test_the_room_holds_every_fix_dependent_experiment_exactly(experiments):
     w = 0.5 * 16.0 / (3.0 * math.sqrt(3.0)) * np.sin(phase) ** 3 * np.cos(phase)
     assert inside(x0 - w, y0 + u) == pytest.approx(0.5)
     assert np.max(np.abs(w)) == pytest.approx(0.5, abs=1e-9)
-    sec62 = next(e for e in experiments if e.name == "sec6_2_room")
+    sec62 = next(e for e in experiments if e.name == "sec6_2_start_1m_room")
     assert sec62.parameters["source.length"] == pytest.approx(length, abs=1e-12)
     # the source's own path code ends where the geometry says
     end = SCurvePath(x0, y0, 0.5 * math.pi, sec62.parameters["source.length"], 0.5)
@@ -99,8 +100,8 @@ def test_a_room_that_misses_the_start_is_refused_naming_the_point(experiments):
     with pytest.raises(ConfigError) as error:
         check_room_fits(in_room, moved)
     lines = str(error.value).splitlines()[1:]
-    # two microphone corners below y = 0 for each of the six experiments, nothing else
-    assert len(lines) == 12
+    # two microphone corners below y = 0 for each of the seven experiments, nothing else
+    assert len(lines) == 14
     assert all("microphones at the start at (" in line and "-0.4) m is outside the room "
                "(x in [-3.5, 3.5], y in [0, 7] m, scenarios/room.toml)" in line
                for line in lines)
