@@ -1,11 +1,14 @@
-"""Cost of FMI calls through sonotrack's FMU binary against pythonfmu's and against our library
-before issue 23, on the same slave; FMU sizes; fmi2Instantiate times in a C host.
+"""Cost of FMI calls through sonotrack's FMU binary against pythonfmu's, against our library
+before issue 23 and before portable FMUs, on the same slave; FMU sizes (plain and portable);
+fmi2Instantiate times in a C host (plain and portable).
 
 WheelController is built from this checkout as ``sonotrack build`` ships it (our binary), then
-copied with pythonfmu 0.7.0's linux64 binary put back, and with our library as it was at
-benchmarks/_fmi_binary_builds.REFERENCE_COMMIT (gcc -O2, as ``make`` built it then). All three
-are loaded in one Python process and called through their raw ctypes functions (as the master's
-hot path calls them):
+copied with pythonfmu 0.7.0's linux64 binary put back, with our library as it was at
+benchmarks/_fmi_binary_builds.REFERENCE_COMMIT (gcc -O2, as ``make`` built it then) and as it
+was at BEFORE_PORTABLE_COMMIT (zig, as ``make`` builds it now), and built with ``--portable``
+(the same library; in a Python host the carried runtime is not used). All five are loaded in
+one Python process and called through their raw ctypes functions (as the master's hot path
+calls them):
 
 * ``getReal`` of 1 and of 20 values, ``setReal`` of the 2 inputs, ``doStep`` (which includes the
   controller's own computation, the same in both);
@@ -21,10 +24,14 @@ Also: the default scenario's stepping time (scenarios/s_curve.toml, summary ``wa
 all five FMUs built each way, one fresh process per run, runs alternating; and the RSS growth
 over 500 instantiate/free cycles of WheelController with our binary (with sys.path and
 sys.modules unchanged). Targets: ours <= 0.7x pythonfmu's per call; ours within +-10 % of the
-reference library per call (issue 23: thread safety, the Python search and the glibc 2.17
-build must not cost per call). Also the size of every FMU (and what it unpacks to), and the
-wall time of the first fmi2Instantiate in a fresh C host process (the library starts Python
-and loads the model) and of a later one, per FMU (medians of --instantiate-runs processes).
+reference library and of the library before portable FMUs per call (issue 23: thread safety,
+the Python search, the glibc 2.17 build and the carried runtime must not cost per call). Also
+the size of every FMU, plain and portable (and what it unpacks to), and the wall time of the
+first fmi2Instantiate in a fresh C host process (the library starts Python and loads the
+model: the build's Python for a plain FMU, its own runtime for a portable one) and of a later
+one, per FMU: medians of --instantiate-runs processes, plain and portable alternating.
+
+The machine is shared: the load average is read before and after measuring and recorded.
 
 Writes benchmarks/results/fmi_call_cost.json.
 
@@ -35,6 +42,7 @@ Writes benchmarks/results/fmi_call_cost.json.
 import argparse
 import ctypes
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -44,7 +52,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import median, write_result  # noqa: E402
-from _fmi_binary_builds import (REFERENCE_COMMIT, c_host_instantiate_times, fmu_sizes,  # noqa: E402
+from _fmi_binary_builds import (BEFORE_PORTABLE_COMMIT, REFERENCE_COMMIT,  # noqa: E402
+                                before_portable_library, c_host_instantiate_times, fmu_sizes,
                                 reference_library, with_library)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -54,17 +63,22 @@ REFERENCE_TOLERANCE = 0.10
 
 
 def build_both(names, out):
-    """Build ``names`` into out/ours and out/pythonfmu (same code, different linux64 binary)."""
+    """Build ``names`` into out/ours, out/pythonfmu and out/portable (same code, different linux64
+    binary or runtime) and WheelController with the two earlier libraries."""
     from orchestrator.builder.fmus import build_fmu
     from orchestrator.builder.fmi_binary import restore_pythonfmu_binary
 
-    paths = {"ours": {}, "pythonfmu": {}}
+    paths = {"ours": {}, "pythonfmu": {}, "portable": {}}
     for name in names:
         paths["ours"][name] = build_fmu(name, out / "ours")
         paths["pythonfmu"][name] = restore_pythonfmu_binary(build_fmu(name, out / "pythonfmu"))
+        paths["portable"][name] = build_fmu(name, out / "portable", portable=True)
     paths["reference"] = {"WheelController": with_library(
         paths["ours"]["WheelController"], reference_library(out),
         out / "reference" / "WheelController.fmu")}
+    paths["before_portable"] = {"WheelController": with_library(
+        paths["ours"]["WheelController"], before_portable_library(out),
+        out / "before_portable" / "WheelController.fmu")}
     return paths
 
 
@@ -155,9 +169,10 @@ def call_costs(paths, repeats, calls):
         row.update({f"ratio_to_{label}": median(ratios[label]) for label in ratios})
         row.update({"calls_per_batch": batch, "rounds": repeats,
                     "target_met": row["ratio_to_pythonfmu"] <= TARGET_RATIO})
-        if "reference" in ratios:
-            row["within_tolerance_of_reference"] = \
-                abs(row["ratio_to_reference"] - 1.0) <= REFERENCE_TOLERANCE
+        for label in ("reference", "before_portable", "portable"):
+            if label in ratios:
+                row[f"within_tolerance_of_{label}"] = \
+                    abs(row[f"ratio_to_{label}"] - 1.0) <= REFERENCE_TOLERANCE
         result[name] = row
     return result
 
@@ -243,6 +258,26 @@ def scenario_times(paths, runs, out):
             "process_exit_status": exits}
 
 
+def portable_glibc_floor(fmu_path, out):
+    """The newest GLIBC version the ELF files a portable FMU carries need (by part)."""
+    import zipfile
+
+    sys.path.insert(0, str(ROOT))
+    from tests.support.elf_versions import glibc_floor
+
+    folder = Path(out) / "glibc_floor"
+    with zipfile.ZipFile(fmu_path) as archive:
+        archive.extractall(folder)
+    lib = folder / "binaries" / "linux64" / "python" / "lib"
+    parts = {"libpython": "libpython*", "numpy": "python3.*/site-packages/numpy*/**/*.so*",
+             "lib_dynload": "python3.*/lib-dynload/*.so"}
+    floors = {}
+    for part, pattern in parts.items():
+        floors[part] = ".".join(map(str, max(glibc_floor(p) for p in lib.glob(pattern))))
+    floors["floor"] = max(floors.values(), key=lambda v: tuple(map(int, v.split("."))))
+    return floors
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=21)
@@ -254,9 +289,14 @@ def main(argv=None):
     sys.path.insert(0, str(ROOT))
     from tests.support.fmu_checks import instantiate_free_cycles
 
+    load_before = os.getloadavg()
+    print(f"load average before: {load_before[0]:.2f} {load_before[1]:.2f} "
+          f"{load_before[2]:.2f} ({os.cpu_count()} cores)")
     out = Path(tempfile.mkdtemp(prefix="sonotrack_fmi_cost_"))
     paths = build_both(NAMES, out)
-    costs = call_costs(paths, args.repeats, args.calls)
+    costs = call_costs({label: paths[label] for label in
+                        ("ours", "pythonfmu", "reference", "before_portable", "portable")},
+                       args.repeats, args.calls)
     floor = ctypes_floor_us(args.calls)
     model_us = model_do_step_us(args.repeats, max(1, args.calls // 10))
     step = costs["doStep"]
@@ -271,7 +311,10 @@ def main(argv=None):
               f"  reference ({REFERENCE_COMMIT}) {row['reference_us']:7.2f} us  ratio "
               f"{row['ratio_to_reference']:.3f} ("
               f"{'met' if row['within_tolerance_of_reference'] else 'NOT met'}: within "
-              f"+-{REFERENCE_TOLERANCE:.0%})")
+              f"+-{REFERENCE_TOLERANCE:.0%}); before portable ({BEFORE_PORTABLE_COMMIT}) "
+              f"{row['before_portable_us']:7.2f} us ratio {row['ratio_to_before_portable']:.3f} "
+              f"({'met' if row['within_tolerance_of_before_portable'] else 'NOT met'}); "
+              f"portable FMU {row['portable_us']:7.2f} us ratio {row['ratio_to_portable']:.3f}")
     print(f"doStep: the model's own do_step {model_us:.2f} us; binary overhead ours "
           f"{step['overhead_ours_us']:.2f} us, pythonfmu {step['overhead_pythonfmu_us']:.2f} us, "
           f"ratio {step['overhead_ratio']:.3f}")
@@ -286,14 +329,24 @@ def main(argv=None):
     cycles = instantiate_free_cycles(paths["ours"]["WheelController"], 500)
     print(f"500 instantiate/free cycles: RSS +{cycles['rss_growth_kib']} KiB, sys.path unchanged "
           f"{cycles['path_unchanged']}, modules added {cycles['modules_added']}")
-    sizes = fmu_sizes(paths["ours"])
-    for name, size in sizes.items():
-        print(f"{name}.fmu: {size['fmu_bytes'] / 1e3:.1f} kB ({size['unpacked_bytes'] / 1e3:.1f} kB "
-              f"unpacked)")
-    instantiate = c_host_instantiate_times(paths["ours"], args.instantiate_runs, out)
-    for name, row in instantiate.items():
-        print(f"C host fmi2Instantiate {name}: first {row['first_ms']:.1f} ms (fresh process: "
-              f"Python started, model loaded), later {row['later_ms']:.2f} ms")
+    sizes = {"plain": fmu_sizes(paths["ours"]), "portable": fmu_sizes(paths["portable"])}
+    for name in NAMES:
+        plain, portable = sizes["plain"][name], sizes["portable"][name]
+        print(f"{name}.fmu: plain {plain['fmu_bytes'] / 1e3:.1f} kB ({plain['unpacked_bytes'] / 1e3:.1f} "
+              f"kB unpacked), portable {portable['fmu_bytes'] / 1e6:.2f} MB "
+              f"({portable['unpacked_bytes'] / 1e6:.1f} MB unpacked)")
+    glibc = portable_glibc_floor(paths["portable"]["WheelController"], out)
+    print(f"portable runtime needs glibc {glibc['floor']} (libpython {glibc['libpython']}, "
+          f"numpy {glibc['numpy']}, standard extension modules {glibc['lib_dynload']})")
+    instantiate = c_host_instantiate_times(
+        {"plain": paths["ours"], "portable": paths["portable"]}, args.instantiate_runs, out)
+    for name in NAMES:
+        plain, portable = instantiate["plain"][name], instantiate["portable"][name]
+        print(f"C host fmi2Instantiate {name}: first plain {plain['first_ms']:.1f} ms, portable "
+              f"{portable['first_ms']:.1f} ms (ratio {portable['first_ratio_to_plain']:.2f}); "
+              f"later plain {plain['later_ms']:.2f} ms, portable {portable['later_ms']:.2f} ms")
+    load_after = os.getloadavg()
+    print(f"load average after: {load_after[0]:.2f} {load_after[1]:.2f} {load_after[2]:.2f}")
     path = write_result("fmi_call_cost", {
         "description": "FMI call cost through sonotrack's binary vs pythonfmu 0.7.0's on "
                        "WheelController, raw ctypes calls from one Python process, interleaved "
@@ -301,10 +354,11 @@ def main(argv=None):
         "target_ratio": TARGET_RATIO,
         "reference_commit": REFERENCE_COMMIT,
         "reference_tolerance": REFERENCE_TOLERANCE,
-        "fmu_sizes": {"plain": sizes,
-                      "portable": "not built: `sonotrack build --portable` (issue 23, item 6) "
-                                  "is not implemented"},
-        "c_host_instantiate": {"plain": instantiate, "portable": None},
+        "before_portable_commit": BEFORE_PORTABLE_COMMIT,
+        "load_average": {"before": load_before, "after": load_after, "cores": os.cpu_count()},
+        "fmu_sizes": sizes,
+        "portable_glibc_floor": glibc,
+        "c_host_instantiate": instantiate,
         "calls": costs,
         "ctypes_floor_us": floor,
         "default_scenario": scenario,

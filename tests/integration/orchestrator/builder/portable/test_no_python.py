@@ -84,3 +84,55 @@ def test_a_portable_fmu_missing_part_of_its_runtime_refuses_with_one_line(
                          "Fix: this FMU carries its own Python in ",
                          "unzip the whole FMU again"):
         assert word in line, (word, line)
+
+
+@pytest.fixture(scope="module")
+def portable_system(portable_paths, tmp_path_factory):
+    """TrackingSystem.fmu of the default scenario (first 2 s) built with --portable."""
+    from orchestrator.builder.fmus import REPO_ROOT
+    from orchestrator.run.as_fmu import build_scenario_fmu
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(REPO_ROOT / "scenarios" / "s_curve.toml").with_overrides(
+        stop_time=SYSTEM_STOP)
+    return build_scenario_fmu(scenario, tmp_path_factory.mktemp("portable_system"),
+                              fmu_dir=next(iter(portable_paths.values())).parent, portable=True)
+
+
+SYSTEM_STOP = 2.0
+
+
+def test_the_portable_system_fmu_runs_in_debian_12_like_fmpy_here(debian12, inside,
+                                                                   portable_system):
+    import fmpy
+
+    from orchestrator.builder.portable import SIZE_LIMIT
+    from tests.support.system_fmu import c_host_plan, c_host_rows, fmpy_run, largest_difference
+
+    assert portable_system.stat().st_size <= SIZE_LIMIT
+    folder, in_root = inside
+    fmpy.extract(str(portable_system), str(folder / "system"))
+    description = fmpy.read_model_description(str(folder / "system"))
+    ports = [v.name for v in description.modelVariables
+             if v.causality == "output" and v.type == "Real"][:64]
+    completed = run_in_root(debian12, in_root,
+                            c_host_plan(in_root / "system", description, SYSTEM_STOP, ports))
+    assert completed.returncode == 0, completed.stderr[-3000:]
+    ours = c_host_rows(completed.stdout, ports)
+    assert len(ours[ports[0]]) == round(SYSTEM_STOP / 0.02)
+    worst, where = largest_difference(ours, fmpy_run(portable_system, SYSTEM_STOP), ports,
+                                      first_row=1)
+    assert worst <= 1e-12, f"{where}: {worst}"
+
+
+def test_on_a_glibc_older_than_the_runtime_s_the_fmu_refuses_with_one_line(portable_extracted):
+    """Debian 11 has glibc 2.31; the carried libpython needs 2.35 (built here): refused, named."""
+    root = debian_root(11)
+    with folder_inside(root) as (folder, in_root):
+        host_for_glibc_2_17(folder)
+        entries = _copy_in((folder, in_root), portable_extracted, ["WheelController"])
+        text, _ = plan(None, entries, 1)
+        line = _one_line(run_in_root(root, in_root, text), "c_WheelController")
+    for word in ("libpython", "(carried in the FMU) could not be loaded",
+                 "version `GLIBC_2.3"):
+        assert word in line, (word, line)

@@ -91,11 +91,16 @@ def test_in_a_c_host_the_carried_runtime_comes_before_the_build_python(
         c_host, portable_extracted):
     folder, description = portable_extracted[NAME]
     text, _ = plan(None, [(NAME, folder, description, f"c_{NAME}")])
-    completed = run_host(c_host, text, env={**host_env(), "LD_DEBUG": "files"})
-    opened = _opened(completed.stderr)
+    carried = str(folder / RUNTIME_FOLDER / "lib" / "libpython3.11.so.1.0")
     build_libpython = os.path.realpath(Path(sysconfig.get_config_var("LIBDIR")) /
                                        sysconfig.get_config_var("INSTSONAME"))
-    assert str(folder / RUNTIME_FOLDER / "lib" / "libpython3.11.so.1.0") in opened, opened
+    completed = run_host(c_host, text, env={**host_env(), "LD_DEBUG": "files"})
+    opened = _opened(completed.stderr)
+    assert carried in opened, opened
     assert build_libpython not in [os.path.realpath(p) for p in opened]
-    completed = run_host(c_host, text)
-    check_host_run(completed, [NAME], portable_extracted)
+    check_host_run(run_host(c_host, text), [NAME], portable_extracted)
+    # the same check the other way round: a Python named in SONOTRACK_PYTHON comes first
+    completed = run_host(c_host, text, env={**host_env(), "LD_DEBUG": "files",
+                                            "SONOTRACK_PYTHON": sys.executable})
+    opened = [os.path.realpath(p) for p in _opened(completed.stderr)]
+    assert build_libpython in opened and os.path.realpath(carried) not in opened
