@@ -65,13 +65,14 @@ _SYSTEM = ("libc.so", "libm.so", "libpthread.so", "libdl.so", "librt.so", "libut
 
 
 def libpython():
-    """The build Python's shared libpython; a static Python cannot be carried."""
+    """The build Python's shared libpython (Debian's python3.11 is linked statically, but its
+    package libpython3.11 puts the same build's shared library where sysconfig says)."""
     library = Path(sysconfig.get_config_var("LIBDIR") or "",
                    sysconfig.get_config_var("INSTSONAME") or "")
-    if not sysconfig.get_config_var("Py_ENABLE_SHARED") or not library.is_file():
-        raise BuildError(f"--portable needs a Python built with --enable-shared (a shared "
-                         f"libpython); {sys.executable} has none: make the venv with one "
-                         f"(Debian: apt-get install python3.11-venv libpython3.11)")
+    if not library.name.startswith("libpython") or not library.is_file():
+        raise BuildError(f"--portable needs the build Python's shared libpython ({library} "
+                         f"does not exist): install it (Debian: apt-get install libpython3.11) "
+                         f"or make the venv with a Python built with --enable-shared")
     return library
 
 
