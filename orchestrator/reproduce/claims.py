@@ -22,7 +22,7 @@ from .verdicts import (CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER,
                        classify)
 
 __all__ = ["Judgement", "judge_claim", "Claim", "MECHANISMS", "CONTROL_MECHANISMS",
-           "MOTION_MECHANISMS", "TRACKING_MECHANISMS", "mechanism_figures", "mechanism_text", "paired_at_arrival",
+           "MOTION_MECHANISMS", "ROTATE_MECHANISMS", "MODES_MECHANISMS", "TRACKING_MECHANISMS", "mechanism_figures", "mechanism_text", "paired_at_arrival",
            "per_run_slopes"]
 
 
@@ -207,11 +207,18 @@ _SHOWN = {
 }
 CONTROL_MECHANISMS = ("arrival_s", "error_at_arrival_m", "drift_after_arrival_m",
                       "rmse_speed_m_s", "slip_time_s", "peak_slip")
-MOTION_MECHANISMS = ("arrival_s", "error_at_arrival_m", "rmse_speed_m_s", "turn_error_deg",
-                     "radius_fit_m", "fix_range_bias_m", "fix_bearing_rmse_deg")
+# Tables 1-3: each mode's own geometry (the turn on the spot of rotate then go, the driven
+# radius of the arc), and what both share when the two modes are compared
+MOTION_MECHANISMS = ("arrival_s", "error_at_arrival_m", "rmse_speed_m_s", "radius_fit_m",
+                     "fix_range_bias_m", "fix_bearing_rmse_deg")
+ROTATE_MECHANISMS = ("arrival_s", "error_at_arrival_m", "rmse_speed_m_s", "turn_error_deg",
+                     "fix_range_bias_m", "fix_bearing_rmse_deg")
+MODES_MECHANISMS = ("arrival_s", "error_at_arrival_m", "rmse_speed_m_s", "rmse_own_plan_m",
+                    "fix_range_bias_m", "fix_bearing_rmse_deg")
 TRACKING_MECHANISMS = ("late_gap_m", "lane_rms_m", "rmse_own_plan_m", "min_gap_m",
                        "slip_time_s", "fix_range_bias_m", "fix_bearing_rmse_deg")
 MECHANISMS = {"control": CONTROL_MECHANISMS, "motion": MOTION_MECHANISMS,
+              "rotate": ROTATE_MECHANISMS, "modes": MODES_MECHANISMS,
               "tracking": TRACKING_MECHANISMS}
 
 
@@ -245,7 +252,8 @@ def mechanism_text(analysis, cells, kind="control"):
     cells : dict
         Label -> cell name (e.g. ``{"CFGS-PD": ..., "CPID": ...}``), two or one.
     kind : str
-        Which mechanisms to measure (:data:`MECHANISMS`): control, motion or tracking.
+        Which mechanisms to measure (:data:`MECHANISMS`): control, motion (a curvature cell),
+        rotate (a rotate-then-go cell), modes (the two modes compared) or tracking.
 
     Returns
     -------

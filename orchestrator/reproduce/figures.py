@@ -15,7 +15,7 @@ from orchestrator.report.matplotlib_agg import pyplot
 from .analysis import CASE_TARGETS, reference_path
 from .experiments import (CONTROLLERS, FRICTIONS, NOMINAL_FRICTION, SEC62_STARTS, sec62_cell,
                           t89_cell)
-from .following import BODY_LENGTH
+from .following import BODY_LENGTH, source_lane
 from .plotting import COLOURS, band, paths, save, traces
 from .report import Figure
 
@@ -61,21 +61,20 @@ def _sec62_compare(study, out, path, number):
     reference = source_runs[0].source_xy() if source_runs and source_runs[0].ok else None
     series = ["source path"] + [_LABEL[m] for m in cells]
     if reference is not None:
-        # every 4th source sample: 8 mm apart at 0.2 m/s, chord error far below 0.1 mm; the
-        # source's own path belongs to neither mode's plan
-        ref = np.vstack([reference[::4], reference[-1:]])
+        # the source's lane belongs to neither mode's plan (following.py)
+        ref = source_lane(reference)
         for mode, runs in cells.items():
             t, m = traces(runs, None, _deviation(ref))
             band(b, t, m, _LABEL[mode], COLOURS[mode])
-    b.set(title="distance from the source's own path", xlabel="time [s]",
+    b.set(title="distance from the source's lane", xlabel="time [s]",
           ylabel="distance [m]")
     b.grid(True, alpha=0.3)
     b.legend(fontsize=7)
     name = f"fig{number:02d}_{'straight' if path == 'straight' else 'scurve'}_curvature.png"
     return Figure(f"Fig. {number}", f"{path} source path, {_START_TEXT}, CFGS-PD (default "
                   "form), feedforward on, mu 0.8: curvature planner vs rotate then go; right: "
-                  "distance from the source's own path (a reference that is neither mode's "
-                  "plan), mean and 95 % interval",
+                  "distance from the source's lane (its path extended backwards; a reference "
+                  "that is neither mode's plan), mean and 95 % interval",
                   save(fig, out / name), series)
 
 
@@ -212,7 +211,8 @@ def _comparison(analysis, out):
                   "RMSE by controller arm, feedforward and friction (symmetric-log axis, "
                   "linear within 1 mm of zero)",
                   save(fig, out / "fig17_static_dynamic_comparison.png"),
-                  [_LABEL[a] for a, _ in arms])
+                  [_LABEL[a] + (", ki per sample" if u == "per_sample" else "")
+                   for a, u in arms])
 
 
 def _relative(run):
@@ -302,7 +302,7 @@ def _speed_trends(analysis, out, speeds):
     if not speeds or not analysis.has(f"t13_v{speeds[0]:g}_curvature"):
         return None
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
-    for ax, key, title in ((axes[0], "error_m", "final error [m]"),
+    for ax, key, title in ((axes[0], "error_at_arrival_m", "error at arrival [m]"),
                            (axes[1], "radius_fit_m", "radius driven [m]"),
                            (axes[2], "rmse_path_m", "path RMSE [m]")):
         for offset, mode in ((-0.004, "rotate_then_go"), (0.004, "curvature")):
@@ -318,7 +318,7 @@ def _speed_trends(analysis, out, speeds):
         ax.set(title=f"Tables 1-3: {title} over speed", xlabel="v [m/s]", ylabel=title)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-    return Figure("Tables 1-3", "final error, driven radius and path RMSE over the speed "
+    return Figure("Tables 1-3", "error at arrival, driven radius and path RMSE over the speed "
                   "(mean and 95 % interval)", save(fig, out / "table1_3_speed_trends.png"),
                   [_LABEL["rotate_then_go"], _LABEL["curvature"]])
 

@@ -3,8 +3,9 @@
 The fixed PD of Tables 8-9 has every element of the default-form CFGS-PD except the schedule;
 its gains are the median of the scheduled kp and kd over both wheels while the planner's
 reference is not zero, in the paper's two manoeuvres (Cases 1 and 2, nominal parameters, no
-draws). Measured once per study, before its runs, from the FMUs the study uses, so the arm
-follows the default form wherever it changes.
+draws). Measured by every ``reproduce()`` call that runs Tables 8-9 (two 12 s runs, before
+the study's own), from the FMUs the study uses, so the arm follows the default form wherever
+it changes; the gains are inputs of the cells, so a changed form gives new cells, never a mix.
 """
 
 import tempfile

@@ -65,7 +65,8 @@ def _headlines(claims):
         for claim in chosen[:_HEADLINES_PER_VERDICT]:
             lines.append([Verdict(verdict, _TONES[verdict]),
                           f": {claim.source}: {claim.claim} ({claim.condition}, against "
-                          f"{claim.comparator}): {_effect(claim)}; {claim.requirement()}"])
+                          f"{claim.comparator}): {_effect(claim)}. Decided: "
+                          f"{claim.judged.verdict.rule}"])
         if len(chosen) > _HEADLINES_PER_VERDICT:
             lines.append(f"... and {len(chosen) - _HEADLINES_PER_VERDICT} more {verdict} in "
                          "Claims and verdicts.")
@@ -220,8 +221,10 @@ class Report:
         section.paragraph(
             f"Monte Carlo: {s.get('runs_per_cell')} runs per cell, {s.get('runs_total')} runs "
             f"in all ({s.get('runs_computed')} computed, {s.get('runs_reused')} reused from "
-            f"disk), study seed {s.get('study_seed')}; every figure is the mean over a cell's "
-            f"runs with its {level} % Student-t interval 'mean [low, high]'. Stop times x"
+            f"disk), study seed {s.get('study_seed')}; every figure is an estimate over a cell's "
+            f"runs with its {level} % interval 'estimate [low, high]': the mean and its "
+            "Student-t interval, or, marked '(median)', the median and its rank-based interval "
+            "where runs gave no value or the values separate (Claims and verdicts). Stop times x"
             f"{s.get('stop_time_scale')}. Wall time {s.get('wall_time_s', 0):.0f} s on "
             f"{s.get('workers')} worker(s).")
         section.paragraph(["Varied in every run (uniform in the band around the cell's "

@@ -1,7 +1,7 @@
 """Free field and the room side by side: every fix-dependent claim judged in both.
 
 The claims of the room's runs are built by the same table code as free field's (the same
-thresholds rule, the same :func:`~orchestrator.reproduce.statistics.judge`); here they are
+margins, the same verdict rule of :mod:`orchestrator.reproduce.verdicts`); here they are
 paired with their free-field twins by source, claim and condition. For every pair whose
 verdict differs, the reason shown is measured, not supposed: the claim's effect in both
 conditions and the localizer's fix errors in the cells it is about (RMS range and bearing

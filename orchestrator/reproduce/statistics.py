@@ -1,7 +1,7 @@
 """Intervals, paired tests and the choice of interval over Monte Carlo runs.
 
-Each figure of the report is the mean over a cell's runs with a two-sided Student-t interval
-(:func:`mean_interval`). A claim compares two cells run by run (the runs share their draws,
+A figure of the report is the mean over a cell's runs with a two-sided Student-t interval
+(:func:`mean_interval`) unless :func:`evidence` below chooses the median's interval. A claim compares two cells run by run (the runs share their draws,
 :mod:`orchestrator.reproduce.tolerances`) on the paired differences, or uses every speed: per
 run, the least-squares slope of the figure over the speeds (:func:`slope_interval`).
 

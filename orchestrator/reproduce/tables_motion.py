@@ -1,6 +1,7 @@
 """Sec. 3.6 (Tables 1-3) and Sec. 4.2's wheel profiles (Tables 6-7): tables, claims, ratios.
 
-Every simulated figure is a mean with its 95 % interval over a cell's Monte Carlo runs;
+Every simulated figure is an estimate with its 95 % interval over a cell's Monte Carlo runs
+(the mean, or the median where runs gave no value or the values separate: statistics.py);
 Tables 6-7 put the simulated wheels (cruise speed, ramp acceleration, encoder distance) beside
 the planner's formula values (Eqs. 36-42) and the paper's numbers.
 """
@@ -66,8 +67,13 @@ def motion_tables(analysis, selected, speeds, paper):
     def growth(mode, key, margin, unit, claim, paper_value, paper_text, source):
         runs = list(zip(*[analysis.values(cell(s, mode), key) for s in speeds]))
         slopes = per_run_slopes(speeds, runs)
-        lost = sum(1 for s in speeds for f in analysis.figures(cell(s, mode))
-                   if f is None or not f.get("arrived", True))
+        lost = 0
+        if key == "error_at_arrival_m":
+            # a run that never arrived at some speed has no error slope: a loss
+            arrived = list(zip(*[analysis.values(cell(s, mode), "arrived") for s in speeds]))
+            for i, flags in enumerate(arrived):
+                if not all(flags):
+                    slopes[i], lost = None, lost + 1
         ends = {f"v {speeds[0]:g}": cell(speeds[0], mode), f"v {speeds[-1]:g}":
                 cell(speeds[-1], mode)}
         return Claim(source, claim, f"{len(speeds)} speeds {speeds[0]:g}-{speeds[-1]:g} m/s",
@@ -75,7 +81,8 @@ def motion_tables(analysis, selected, speeds, paper):
                      paper=paper_value, paper_text=paper_text, margin=margin,
                      comparator="no growth (slope 0)", failures=lost,
                      cells=tuple(cell(s, mode) for s in speeds),
-                     reason=mechanism_text(analysis, ends, "motion"))
+                     reason=mechanism_text(analysis, ends,
+                                            "motion" if mode == "curvature" else "rotate"))
 
     if "table1" in selected:
         t = Table("table1", "Table 1: rotate then go (without curvature), target (1.5, 1.5) m, "
@@ -96,8 +103,8 @@ def motion_tables(analysis, selected, speeds, paper):
             t.rows.append(row)
         t.notes += ["The straight-line distance to (1.5, 1.5) is 2.121 m; the paper's error "
                     "column equals its distance minus 2.000 m in every row.",
-                    "time: until the robot is at rest at its final pose (definitions); the "
-                    "paper's 'Time (m/s)' column is in ms.",
+                    "time: until the robot has arrived (within 0.10 m of the target and at "
+                    "rest, definitions); the paper's 'Time (m/s)' column is in ms.",
                     "Our rotate_then_go plans a new leg (turn, then straight) when a fix "
                     "arrived during the last leg; distance and time include it."]
         tables["table1"] = t
@@ -165,7 +172,7 @@ def motion_tables(analysis, selected, speeds, paper):
                 margin=max(BETTER_FRACTION * abs(effect or 0.0), RMSE_RESOLUTION),
                 comparator="rotate then go", failures=lost, cells=(better, other),
                 reason=mechanism_text(analysis, {"curvature": better,
-                                                 "rotate then go": other}, "motion")))
+                                                 "rotate then go": other}, "modes")))
         t.notes.append("Ideal paths: each mode against its own plan, the segment (0, 0) -> "
                        "(1.5, 1.5) for non-curvature and the tangent arc R = 1.5 m for "
                        "curvature; the paper does not define its RMSE.")
@@ -208,7 +215,7 @@ def profile_tables(analysis, selected, paper):
     """Tables 6-7: simulated wheels at L = 0.40 m and 0.289 m beside formulas and paper."""
     tables, ratios = {}, []
     formulas = {0.40: formula_profiles(0.40), 0.289: formula_profiles(0.289)}
-    cells = {0.40: "t67_{case}_track040", 0.289: "t89_{case}_fgs_pd_ff_on_mu_nominal"}
+    cells = {0.40: "t67_{case}_track040", 0.289: "t89_{case}_fgs_pd_ff_on_mu0.8"}
     keys = {"velocity": "cruise_m_s", "acceleration": "ramp_m_s2", "distance": "encoder_m"}
     columns = [("quantity", "quantity", ""), ("sim040", "sim L=0.40", ".3f"),
                ("formula040", "formula L=0.40", ".3f"), ("sim0289", "sim L=0.289", ".3f"),

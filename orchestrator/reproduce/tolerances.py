@@ -71,7 +71,7 @@ def load_tolerances(path=None):
     ------
     ConfigError
         Naming the file and field: unreadable file, bad TOML, a parameter without exactly one
-        of ``relative`` / ``absolute``, a band that is not a finite number >= 0 (relative < 1),
+        of ``relative`` / ``absolute`` / ``range``, a bad ``range`` or ``linked``, a band that is not a finite number >= 0 (relative < 1),
         or a missing justification.
     """
     where = "orchestrator/data/tolerances.toml" if path is None else str(path)

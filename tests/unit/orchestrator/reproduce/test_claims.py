@@ -111,3 +111,12 @@ def test_following_window_ends_when_the_source_mutes():
     silent = np.zeros(len(t), dtype=bool)
     assert following_figures(t, robot, np.tile(source[:1], (len(t), 1)),
                              silent)["late_gap_m"] is None
+
+
+def test_a_follower_behind_the_sources_start_is_measured_across_the_lane():
+    t, source = _straight()
+    # the source starts at (1, 0) driving +y; a follower 0.3 m to its side and 2 m behind its
+    # start all along: across the lane it is 0.3 m off, whatever the gap along it
+    robot = np.column_stack([np.full(len(t), 1.3), np.full(len(t), -2.0)])
+    figures = following_figures(t, robot, source, np.ones(len(t), dtype=bool))
+    assert figures["lane_rms_m"] == pytest.approx(0.3)
