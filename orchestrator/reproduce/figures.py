@@ -317,7 +317,11 @@ def _speed_trends(analysis, out, speeds):
                             fmt="o-", capsize=3, color=COLOURS[mode], label=_LABEL[mode])
         ax.set(title=f"Tables 1-3: {title} over speed", xlabel="v [m/s]", ylabel=title)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
+        else:   # an empty panel says why instead of looking like a plotting fault
+            ax.text(0.5, 0.5, "no run arrived" if key == "error_at_arrival_m" else "no run",
+                    transform=ax.transAxes, ha="center", va="center")
     return Figure("Tables 1-3", "error at arrival, driven radius and path RMSE over the speed "
                   "(mean and 95 % interval)", save(fig, out / "table1_3_speed_trends.png"),
                   [_LABEL["rotate_then_go"], _LABEL["curvature"]])

@@ -39,7 +39,7 @@ def median_operating_point(fmu_dir=None, scenario_dir=None):
     from orchestrator.scenario import load_scenario
 
     from .experiments import SCENARIO_DIR, STOP_DISTANCE
-    from .runs import read_results
+    from orchestrator.run import read_results
 
     scenario_dir = Path(scenario_dir or SCENARIO_DIR)
     kp, kd = [], []
@@ -54,7 +54,7 @@ def median_operating_point(fmu_dir=None, scenario_dir=None):
                                for key, value in (("mode", "fgs_pd"), ("form", "default"))}})
             out = Path(scratch) / str(number)
             run_scenario(scenario, out, progress=False, plots=False, fmu_dir=fmu_dir)
-            data = read_results(out)
+            data = read_results(out / "results.csv")
             for side in ("left", "right"):
                 moving = np.abs(data[f"planner.v_ref_{side}"]) > 0.0
                 kp.append(data[f"controller_{side}.kp"][moving])

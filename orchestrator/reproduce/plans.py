@@ -134,26 +134,32 @@ def own_plans(mode, xy, heading, measurement_id, valid, distance, bearing, v_ref
 def distance_to_plan(points, plan):
     """Distance [m] of each of ``points`` ``(m, 2)`` from a plan's path (module docstring)."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    start = np.array([plan.x, plan.y])
-    relative = points - start
-    to_start = np.hypot(*relative.T)
-    ux, uy = math.cos(plan.heading), math.sin(plan.heading)
-    if abs(plan.curvature) < 1e-12:
-        along = relative @ np.array([ux, uy])
-        across = np.abs(ux * relative[:, 1] - uy * relative[:, 0])
-        return np.where(along >= 0.0, across, to_start)
-    radius = 1.0 / plan.curvature                 # signed: the centre lies left for > 0
-    centre = start + radius * np.array([-uy, ux])
-    from_centre = points - centre
-    start_angle = math.atan2(*(start - centre)[::-1])
-    turned = np.sign(plan.curvature) * (np.arctan2(from_centre[:, 1], from_centre[:, 0])
-                                        - start_angle)
-    turned = np.mod(turned, 2.0 * math.pi)
-    on_arc = np.abs(np.hypot(*from_centre.T) - abs(radius))
-    end_angle = start_angle + math.copysign(_ARC_SPAN, plan.curvature)
-    end = centre + abs(radius) * np.array([math.cos(end_angle), math.sin(end_angle)])
-    off_arc = np.minimum(to_start, np.hypot(*(points - end).T))
-    return np.where(turned <= _ARC_SPAN, on_arc, off_arc)
+    return _distance_to_plans(points, plan.x, plan.y, plan.heading, plan.curvature)
+
+
+def _distance_to_plans(points, x, y, heading, curvature):
+    """:func:`distance_to_plan`, point by point: the plan's start ``(x, y)``, ``heading`` and
+    ``curvature`` are scalars or one per point (one numpy pass for every plan of a run)."""
+    x, y, heading, curvature = (np.broadcast_to(np.asarray(a, dtype=float), len(points))
+                                for a in (x, y, heading, curvature))
+    rx, ry = points[:, 0] - x, points[:, 1] - y
+    to_start = np.hypot(rx, ry)
+    ux, uy = np.cos(heading), np.sin(heading)
+    straight = np.abs(curvature) < 1e-12
+    # a line: across it ahead of the start, to the start behind it
+    line = np.where(rx * ux + ry * uy >= 0.0, np.abs(ux * ry - uy * rx), to_start)
+    # an arc (signed radius: the centre lies left for curvature > 0)
+    radius = 1.0 / np.where(straight, 1.0, curvature)
+    cx, cy = x - radius * uy, y + radius * ux
+    fx, fy = points[:, 0] - cx, points[:, 1] - cy
+    start_angle = np.arctan2(y - cy, x - cx)
+    turned = np.mod(np.sign(curvature) * (np.arctan2(fy, fx) - start_angle), 2.0 * math.pi)
+    on_arc = np.abs(np.hypot(fx, fy) - np.abs(radius))
+    end_angle = start_angle + np.copysign(_ARC_SPAN, curvature)
+    ex = cx + np.abs(radius) * np.cos(end_angle)
+    ey = cy + np.abs(radius) * np.sin(end_angle)
+    off_arc = np.minimum(to_start, np.hypot(points[:, 0] - ex, points[:, 1] - ey))
+    return np.where(straight, line, np.where(turned <= _ARC_SPAN, on_arc, off_arc))
 
 
 def own_plan_rmse(xy, plans):
@@ -172,16 +178,24 @@ def own_plan_rmse(xy, plans):
     """
     xy = np.asarray(xy, dtype=float).reshape(-1, 2)
     lengths = np.hypot(*np.diff(xy, axis=0).T)
-    total, weighted = 0.0, 0.0
+    # every (plan, sample) pair at once: plan k measures samples start_k .. start_k+1
+    # (the boundary sample twice, once as the end of k's segments, once as k+1's start)
+    samples, owner = [], []
     for k, plan in enumerate(plans):
-        first = plan.start
         last = plans[k + 1].start if k + 1 < len(plans) else len(xy) - 1
-        if last <= first:
-            continue
-        d = distance_to_plan(xy[first:last + 1], plan)
-        pieces = lengths[first:last]
-        weighted += float(np.sum(pieces * 0.5 * (d[:-1] ** 2 + d[1:] ** 2)))
-        total += float(np.sum(pieces))
+        if last > plan.start:
+            samples.append(np.arange(plan.start, last + 1))
+            owner.append(np.full(last + 1 - plan.start, k))
+    if not samples:
+        return None
+    samples, owner = np.concatenate(samples), np.concatenate(owner)
+    attribute = {name: np.array([getattr(p, name) for p in plans], dtype=float)[owner]
+                 for name in ("x", "y", "heading", "curvature")}
+    d = _distance_to_plans(xy[samples], **attribute)
+    segment = owner[:-1] == owner[1:]            # both ends under one plan
+    pieces = lengths[samples[:-1][segment]]
+    weighted = float(np.sum(pieces * 0.5 * (d[:-1][segment] ** 2 + d[1:][segment] ** 2)))
+    total = float(np.sum(pieces))
     if total == 0.0:
         return None
     return math.sqrt(weighted / total)

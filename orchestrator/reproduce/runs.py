@@ -5,10 +5,15 @@ Every run of the study (each cell of each
 complete scenario; all of them go to one :func:`orchestrator.sweep.run_many` call, so one
 engine (Dask, local or a cluster) and one progress bar serve the whole study. Finished runs
 are stored by the hash of everything they read, so a second call (or a call after an
-interruption) recomputes nothing that is on disk.
+interruption) recomputes nothing that is on disk. The finished runs are read back by
+``orchestrator.run.read_results`` (the one reader of ``results.csv``) in as many processes as
+the study had workers: parsing 1,960 files took 49 s in one process before (measured 7 Dec on
+an idle machine, 25 ms a run).
 """
 
-import csv
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,7 +21,7 @@ import numpy as np
 
 from .tolerances import monte_carlo_points
 
-__all__ = ["RunRecord", "StudyRuns", "run_study", "read_results"]
+__all__ = ["RunRecord", "StudyRuns", "run_study"]
 
 
 @dataclass
@@ -63,18 +68,6 @@ class StudyRuns:
         return StudyRuns({cell.name: self.cells[cell.key] for cell in cells
                           if cell.key in self.cells},
                          computed=self.computed, reused=self.reused, out_dir=self.out_dir)
-
-
-def read_results(run_dir):
-    """A run's ``results.csv`` as ``{column: array}`` (Booleans as 0/1)."""
-    path = Path(run_dir) / "results.csv"
-    with open(path, newline="") as stream:
-        reader = csv.reader(stream)
-        header = next(reader)
-        rows = [[1.0 if v == "true" else 0.0 if v == "false" else float(v) for v in row]
-                for row in reader]
-    data = np.array(rows, dtype=float) if rows else np.zeros((0, len(header)))
-    return {name: data[:, i] for i, name in enumerate(header)}
 
 
 def _parameter_info(system, names):
@@ -154,23 +147,41 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
                       scheduler=scheduler, workers=workers, progress=progress)
     study = StudyRuns({}, computed=result.computed, reused=result.reused, out_dir=out_dir)
     found = {(row.get("cell"), row.get("index")): row for row in result.rows}
-    for named in settings:
-        row = found.get((named["cell"], named["index"]))
-        record = (_record(named["cell"], named["index"], named, row, result.out_dir)
-                  if row is not None
-                  else RunRecord(named["cell"], named["index"],
-                                 {"status": "missing", "error": "no row in the sweep"}, {},
-                                 "", named))
-        study.cells.setdefault(named["cell"], []).append(record)
+    jobs = [(named["cell"], named["index"], named, found.get((named["cell"], named["index"])),
+             result.out_dir) for named in settings]
+    for record in _read_records(jobs, workers):
+        study.cells.setdefault(record.cell, []).append(record)
     return study
 
 
+def _read_records(jobs, workers):
+    """:func:`_record` of every job, in order, in up to ``workers`` processes (spawned: the
+    sweep's engine may have left threads behind, which a fork would copy mid-state; each ends
+    with this process however it dies, as the sweep's workers do)."""
+    from orchestrator.processes import die_with_parent
+
+    processes = min(len(jobs) // 50, workers or os.cpu_count() or 1)
+    if processes < 2:
+        return [_record(*job) for job in jobs]
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+        return list(pool.map(_record_job, jobs, chunksize=max(1, len(jobs) // (8 * processes))))
+
+
+def _record_job(job):
+    return _record(*job)
+
+
 def _record(cell, index, point, row, sweep_dir):
+    from orchestrator.run import read_results
     from orchestrator.run.folder import read_summary
 
+    if row is None:
+        return RunRecord(cell, index, {"status": "missing", "error": "no row in the sweep"}, {},
+                         "", point)
     run_dir = str(Path(sweep_dir) / row["run_dir"])   # rows name it relative to the sweep
     # read as every reader reads it: a run whose process is gone is "abandoned"
     summary = read_summary(run_dir) or dict(row)
     ok = summary.get("status") == "ok" and (Path(run_dir) / "results.csv").is_file()
-    data = read_results(run_dir) if ok else {}
+    data = read_results(Path(run_dir) / "results.csv") if ok else {}
     return RunRecord(cell, index, summary, data, run_dir, point)
