@@ -89,8 +89,15 @@ def judge_claim(samples, claimed, paper=None, threshold=0.0, margin=None):
             magnitude = signed
         else:
             note = f"the paper's own value {paper:.3g} is not on the claimed side"
+    # a loss is entered as +-inf on its side: -inf in the claimed direction is a run lost by
+    # the arm the claim favours alone
+    sign = 1.0 if claimed == "above" else -1.0
+    infinite = [sign * float(v) for v in samples
+                if v is not None and not isinstance(v, bool) and math.isinf(float(v))]
     verdict = classify(found.estimate, magnitude, claimed, threshold,
-                       margin=0.0 if margin is None else float(margin))
+                       margin=0.0 if margin is None else float(margin),
+                       lost_against=sum(v < 0 for v in infinite),
+                       lost_for=sum(v > 0 for v in infinite))
     return Judgement(found, verdict, note)
 
 
@@ -202,7 +209,7 @@ _SHOWN = {
     "fix_bearing_rmse_deg": ("heard-bearing RMS error", 1.0, "deg", ".2f"),
     "late_gap_m": ("gap in the 2nd half", 1.0, "m", ".3f"),
     "lane_rms_m": ("RMS from the source's path", 1000.0, "mm", ".0f"),
-    "rmse_own_plan_m": ("RMS from own plan", 1000.0, "mm", ".0f"),
+    "rmse_own_plan_m": ("RMS from own plan", 1000.0, "mm", ".1f"),
     "min_gap_m": ("smallest gap", 1.0, "m", ".3f"),
 }
 CONTROL_MECHANISMS = ("arrival_s", "error_at_arrival_m", "drift_after_arrival_m",

@@ -22,6 +22,25 @@ equivalence margin, and first turns our numbers so that the claimed direction is
 5. anything else (the interval straddles 0 beyond the margin, or lies on the opposite side
    but reaches inside the margin): :data:`INCONCLUSIVE`.
 
+Then the lost runs (a robot that lost control or never arrived), which no interval weighs by
+their size: a loss is an outcome beyond any margin. ``lost_against`` counts the pairs in which
+only the arm the claim favours was lost, ``lost_for`` those in which only its comparator was
+(pairs lost on both sides say nothing about the difference). With ``P`` the one-sided sign
+test of the larger count among the two (exact binomial, ``n = lost_against + lost_for``):
+
+6. losses against the claim with ``P < 0.05`` (five or more, none for it): :data:`CONTRADICTED`,
+   unless the interval established the claimed direction (then the cell is mixed:
+   :data:`INCONCLUSIVE`); fewer or mixed losses against it: a verdict of supported, weaker or
+   no effect becomes :data:`INCONCLUSIVE`;
+7. losses for the claim likewise: with ``P < 0.05``, a verdict of no effect or inconclusive
+   becomes :data:`SUPPORTED` (the comparator lost runs the favoured arm kept) and contradicted
+   becomes :data:`INCONCLUSIVE`; fewer, contradicted or no effect becomes
+   :data:`INCONCLUSIVE`.
+
+So five robots lost by CFGS-PD alone out of 20 make "CFGS-PD's error is lower" contradicted,
+even where the 15 that arrived show no difference; one lost robot is enough to withhold "no
+effect".
+
 Defaults and why:
 
 - ``support_fraction`` 0.5: the simulated robot is not the paper's hardware, so its effect is
@@ -41,13 +60,19 @@ Examples
 >>> ours = Estimate(-0.0102, -0.012, -0.0084, 20, 0.004)   # a tenth of the paper's effect
 >>> classify(ours, paper=0.102, claimed="below").category
 'weaker than claimed'
+>>> no_difference = Estimate(0.001, -0.004, 0.009, 20, 0.01)   # the 15 runs that arrived
+>>> classify(no_difference, paper=0.102, claimed="below", margin=0.0102).category
+'no effect'
+>>> classify(no_difference, paper=0.102, claimed="below", margin=0.0102,
+...          lost_against=5).category
+'contradicted'
 """
 
 import math
 from dataclasses import dataclass
 
 __all__ = ["SUPPORTED", "WEAKER", "NO_EFFECT", "CONTRADICTED", "INCONCLUSIVE", "CATEGORIES",
-           "SUPPORT_FRACTION", "Verdict", "classify"]
+           "SUPPORT_FRACTION", "LOSS_LEVEL", "Verdict", "classify"]
 
 SUPPORTED = "supported"
 WEAKER = "weaker than claimed"
@@ -58,6 +83,8 @@ INCONCLUSIVE = "inconclusive"
 CATEGORIES = (SUPPORTED, WEAKER, NO_EFFECT, CONTRADICTED, INCONCLUSIVE)
 
 SUPPORT_FRACTION = 0.5
+#: One-sided level at which lost runs alone decide a verdict (rules 6-7).
+LOSS_LEVEL = 0.05
 
 
 def _finite(value):
@@ -123,7 +150,7 @@ class Verdict:
 
 
 def classify(estimate, paper=None, claimed="above", threshold=0.0,
-             support_fraction=SUPPORT_FRACTION, margin=0.0):
+             support_fraction=SUPPORT_FRACTION, margin=0.0, lost_against=0, lost_for=0):
     """Verdict of a claim that the true value lies ``claimed`` of ``threshold``.
 
     Parameters
@@ -144,6 +171,8 @@ def classify(estimate, paper=None, claimed="above", threshold=0.0,
     margin : float
         Equivalence margin (>= 0) in the quantity's units: effects within +-margin of the
         threshold are too small to matter.
+    lost_against, lost_for : int
+        Pairs lost by the claim's favoured arm alone, and by its comparator alone (rules 6-7).
 
     Returns
     -------
@@ -159,6 +188,9 @@ def classify(estimate, paper=None, claimed="above", threshold=0.0,
         raise ValueError(f"claimed = {claimed!r}; valid choices: above, below")
     if not (math.isfinite(margin) and margin >= 0.0):
         raise ValueError(f"margin = {margin!r}: must be a finite number >= 0")
+    if min(lost_against, lost_for) < 0:
+        raise ValueError(f"lost_against = {lost_against!r}, lost_for = {lost_for!r}: counts "
+                         "of runs, >= 0")
     if not 0.0 < support_fraction <= 1.0:
         raise ValueError(f"support_fraction = {support_fraction!r}: must lie in (0, 1]")
     sign = 1.0 if claimed == "above" else -1.0
@@ -176,6 +208,14 @@ def classify(estimate, paper=None, claimed="above", threshold=0.0,
         return Verdict(category, point, low, high, paper, ratio, claimed, threshold, margin,
                        support_fraction, rule)
 
+    base = _by_interval(verdict, estimate, point, low, high, sign, threshold, margin,
+                        claimed, paper_effect, support_fraction)
+    return _by_losses(base, verdict, lost_against, lost_for)
+
+
+def _by_interval(verdict, estimate, point, low, high, sign, threshold, margin, claimed,
+                 paper_effect, support_fraction):
+    """Rules 1-5."""
     if estimate.n < 2 or math.isnan(low) or math.isnan(high) or math.isnan(point):
         # an infinite bound is an interval (losses ranked at its end), nan is none
         return verdict(INCONCLUSIVE, f"no interval ({estimate.n} runs)")
@@ -199,3 +239,34 @@ def classify(estimate, paper=None, claimed="above", threshold=0.0,
                                f"< {support_fraction:g} x the paper's")
     return verdict(INCONCLUSIVE, f"the interval straddles {threshold:.3g} or the margin "
                                  f"{margin:.3g}")
+
+
+def _upper_tail(k, n):
+    """P(B >= k) for B ~ Binomial(n, 1/2)."""
+    return sum(math.comb(n, i) for i in range(k, n + 1)) / 2.0 ** n
+
+
+def _by_losses(base, verdict, against, for_):
+    """Rules 6-7: lost runs on one side overrule what the interval alone says."""
+    if against == for_:
+        return base
+    n = against + for_
+    worse = "against" if against > for_ else "for"
+    count, other = (against, for_) if worse == "against" else (for_, against)
+    p = _upper_tail(count, n)
+    alone, rest = (("the claimed-better arm", "the comparator") if worse == "against"
+                   else ("the comparator", "the claimed-better arm"))
+    losses = (f"{count} run(s) lost by {alone} alone, {other} by {rest} alone (one-sided "
+              f"sign test p = {p:.2g})")
+    interval_says = f"the interval alone: {base.category} ({base.rule})"
+    if worse == "against":
+        if p < LOSS_LEVEL and base.category not in (SUPPORTED, WEAKER):
+            return verdict(CONTRADICTED, f"{losses}; the losses decide; {interval_says}")
+        if base.category in (SUPPORTED, WEAKER, NO_EFFECT):
+            return verdict(INCONCLUSIVE, f"{losses} against {interval_says}")
+        return base
+    if p < LOSS_LEVEL and base.category in (NO_EFFECT, INCONCLUSIVE):
+        return verdict(SUPPORTED, f"{losses}; the losses decide; {interval_says}")
+    if base.category in (CONTRADICTED, NO_EFFECT):
+        return verdict(INCONCLUSIVE, f"{losses} against {interval_says}")
+    return base

@@ -100,3 +100,47 @@ def test_an_unbounded_interval_from_lost_runs_is_judged():
     assert verdict.category == SUPPORTED
     assert "[-inf, -0.02]" in verdict.text()
     assert classify(interval(0.05, -math.inf, math.inf), PAPER, "below").category == INCONCLUSIVE
+
+
+NO_DIFFERENCE = interval(0.001, -0.004, 0.009)   # the runs that arrived: inside the margin
+
+
+@pytest.mark.parametrize("ours, against, for_, expected", [
+    # losses against the claim: five alone (p 0.031) decide, one withholds "no effect"
+    (NO_DIFFERENCE, 5, 0, CONTRADICTED),
+    (NO_DIFFERENCE, 1, 0, INCONCLUSIVE),
+    (NO_DIFFERENCE, 4, 0, INCONCLUSIVE),                    # p 0.0625: not decided
+    (interval(-0.060, -0.080, -0.040), 5, 0, INCONCLUSIVE),  # mixed: the interval supports
+    (interval(-0.020, -0.060, 0.020), 6, 0, CONTRADICTED),   # straddling, losses decide
+    # losses for the claim: the comparator lost runs the favoured arm kept
+    (NO_DIFFERENCE, 0, 5, SUPPORTED),
+    (NO_DIFFERENCE, 0, 2, INCONCLUSIVE),
+    (interval(0.050, 0.030, 0.070), 0, 6, INCONCLUSIVE),     # mixed: the interval contradicts
+    (interval(-0.060, -0.080, -0.040), 0, 3, SUPPORTED),     # agrees: unchanged
+    # as many on each side: the interval decides
+    (NO_DIFFERENCE, 2, 2, NO_EFFECT),
+], ids=["five_against", "one_against", "four_against", "mixed_supported", "straddles_six",
+        "five_for", "two_for", "mixed_contradicted", "agreeing", "balanced"])
+def test_lost_runs_on_one_side_overrule_the_interval(ours, against, for_, expected):
+    verdict = classify(ours, PAPER, "below", margin=MARGIN, lost_against=against,
+                       lost_for=for_)
+    assert verdict.category == expected, verdict.rule
+    if expected != classify(ours, PAPER, "below", margin=MARGIN).category:
+        assert "lost by" in verdict.rule and "the interval alone" in verdict.rule
+
+
+def test_judge_claim_counts_losses_by_the_side_they_fall_on():
+    from orchestrator.reproduce.claims import judge_claim
+
+    # "below": +inf is a run lost by the claimed-better arm alone (the difference a - b)
+    arrived = [0.001 * (-1) ** i for i in range(15)]
+    judged = judge_claim(arrived + [math.inf] * 5, "below", paper=-PAPER, margin=MARGIN)
+    assert judged.verdict.category == CONTRADICTED
+    assert "5 run(s) lost by the claimed-better arm alone" in judged.verdict.rule
+    # the same losses on the comparator's side support the claim
+    judged = judge_claim(arrived + [-math.inf] * 5, "below", paper=-PAPER, margin=MARGIN)
+    assert judged.verdict.category == SUPPORTED
+    # "above": -inf is the favoured arm's loss
+    judged = judge_claim([-v for v in arrived] + [-math.inf] * 5, "above", paper=PAPER,
+                         margin=MARGIN)
+    assert judged.verdict.category == CONTRADICTED
