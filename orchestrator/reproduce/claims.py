@@ -212,6 +212,16 @@ _SHOWN = {
     "rmse_own_plan_m": ("RMS from own plan", 1000.0, "mm", ".1f"),
     "min_gap_m": ("smallest gap", 1.0, "m", ".3f"),
 }
+# The smallest difference between two cells' medians that counts as a mechanism, per
+# measure (SI units): below it the measure does not resolve a difference (one 20 ms sample for
+# times, a few encoder quanta of 0.5 mm for positions, the localizer's mm-level bias jitter), so
+# a -0 vs -1 mm heard-range bias is not "the largest difference" however large its ratio.
+_RESOLUTION = {
+    "arrival_s": 0.1, "error_at_arrival_m": 0.002, "drift_after_arrival_m": 0.002,
+    "rmse_speed_m_s": 0.001, "slip_time_s": 0.02, "peak_slip": 0.01, "turn_error_deg": 0.2,
+    "radius_fit_m": 0.01, "fix_range_bias_m": 0.005, "fix_bearing_rmse_deg": 0.05,
+    "late_gap_m": 0.02, "lane_rms_m": 0.005, "rmse_own_plan_m": 0.002, "min_gap_m": 0.02,
+}
 CONTROL_MECHANISMS = ("arrival_s", "error_at_arrival_m", "drift_after_arrival_m",
                       "rmse_speed_m_s", "slip_time_s", "peak_slip")
 # Tables 1-3: each mode's own geometry (the turn on the spot of rotate then go, the driven
@@ -253,6 +263,10 @@ def _shown(value, scale, unit, fmt):
 def mechanism_text(analysis, cells, kind="control"):
     """The measured mechanisms of the compared cells, the most different first.
 
+    Measures are ranked by the relative difference of the two cells' medians, counted only
+    where the absolute difference reaches the measure's resolution (:data:`_RESOLUTION`); the
+    first is named "largest difference" when it exceeds 25 %.
+
     Parameters
     ----------
     analysis : Analysis
@@ -285,9 +299,9 @@ def mechanism_text(analysis, cells, kind="control"):
         values = [measured[label][key] for label in labels]
         if any(v is None for v in values):
             continue
-        if len(values) == 2:
-            spread = abs(values[0] - values[1]) / max(abs(values[0]), abs(values[1]), 1e-12)
-        else:
+        if len(values) == 2 and abs(values[0] - values[1]) >= _RESOLUTION[key]:
+            spread = abs(values[0] - values[1]) / max(abs(values[0]), abs(values[1]))
+        else:   # one cell, or a difference the measure does not resolve
             spread = 0.0
         text = " vs ".join(_shown(v, scale, "", fmt) for v in values) + f" {unit}".rstrip()
         ranked.append((spread, f"{name} {text}"))

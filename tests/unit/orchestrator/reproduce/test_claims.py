@@ -120,3 +120,15 @@ def test_a_follower_behind_the_sources_start_is_measured_across_the_lane():
     robot = np.column_stack([np.full(len(t), 1.3), np.full(len(t), -2.0)])
     figures = following_figures(t, robot, source, np.ones(len(t), dtype=bool))
     assert figures["lane_rms_m"] == pytest.approx(0.3)
+
+
+def test_a_difference_below_the_measures_resolution_is_not_the_reason():
+    # Table 3 as measured: heard-range bias 0 vs -1 mm (a ratio of 100 %, below the 5 mm the
+    # bias resolves) beside rotate then go's 32 mm from its own plan
+    def run(bias, own_plan):
+        return {**_run(), "fix_range_bias_m": bias, "fix_bearing_rmse_deg": 0.15,
+                "rmse_own_plan_m": own_plan}
+    cells = FakeAnalysis({"c": [run(0.0002, 0.0003)] * 5, "r": [run(-0.001, 0.032)] * 5})
+    text = mechanism_text(cells, {"curvature": "c", "rotate then go": "r"}, kind="modes")
+    assert "largest difference RMS from own plan 0.3 vs 32.0 mm" in text
+    assert "largest difference heard-range bias" not in text
