@@ -316,16 +316,24 @@ def mechanism_text(analysis, cells, kind="control"):
     return "; ".join(parts + [head + "; ".join(text for _, text in ranked)])
 
 
+# Figures read at arrival: a run that never arrived has none, and is lost for them. Figures
+# of the whole run (path RMSE, slip time) are measured whether it arrived or not: a robot that
+# lost control shows it in them, and one that creeps at 2 cm/s has not lost its path.
+AT_ARRIVAL = ("error_at_arrival_m", "arrival_s", "drift_after_arrival_m")
+
+
 def paired_at_arrival(analysis, better, comparator, key):
     """Per-run ``key(better) - key(comparator)``, losses as +-inf; and the lost-run count.
 
-    A run that never arrived (figure ``arrived`` false) or failed is a loss. Returns
-    ``(samples, losses)``, ``losses`` counting runs lost on either side.
+    A run that failed is a loss; so is one that never arrived (figure ``arrived`` false) when
+    ``key`` is read at arrival (:data:`AT_ARRIVAL`). Returns ``(samples, losses)``,
+    ``losses`` counting runs lost on either side.
     """
     samples, losses = [], 0
+    at_arrival = key in AT_ARRIVAL
     for a, b in zip(analysis.figures(better), analysis.figures(comparator)):
-        lost_a = a is None or not a.get("arrived", True)
-        lost_b = b is None or not b.get("arrived", True)
+        lost_a = a is None or (at_arrival and not a.get("arrived", True))
+        lost_b = b is None or (at_arrival and not b.get("arrived", True))
         losses += int(lost_a) + int(lost_b)
         if lost_a and lost_b:
             samples.append(None)

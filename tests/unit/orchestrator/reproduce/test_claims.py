@@ -132,3 +132,14 @@ def test_a_difference_below_the_measures_resolution_is_not_the_reason():
     text = mechanism_text(cells, {"curvature": "c", "rotate then go": "r"}, kind="modes")
     assert "largest difference RMS from own plan 0.3 vs 32.0 mm" in text
     assert "largest difference heard-range bias" not in text
+
+
+def test_a_run_that_never_arrived_is_lost_only_for_figures_read_at_arrival():
+    # a robot that creeps and never comes to rest has no error at arrival, but its slip time
+    # and path RMSE are measured over the whole run like any other
+    analysis = FakeAnalysis({"a": [_run(arrived=False, slip=0.3)], "b": [_run(slip=0.1)]})
+    assert paired_at_arrival(analysis, "a", "b", "error_at_arrival_m") == ([math.inf], 1)
+    samples, losses = paired_at_arrival(analysis, "a", "b", "slip_time_s")
+    assert samples == [pytest.approx(0.2)] and losses == 0
+    failed = FakeAnalysis({"a": [None], "b": [_run(slip=0.1)]})
+    assert paired_at_arrival(failed, "a", "b", "slip_time_s") == ([math.inf], 1)
