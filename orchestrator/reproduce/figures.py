@@ -184,32 +184,44 @@ def _comparison(analysis, out):
     width = 0.8 / len(arms)
     for ax, key, title in ((axes[0], "error_at_arrival_m", "error at arrival [m]"),
                            (axes[1], "rmse_path_m", "path RMSE [m]")):
-        labels, x, drawn = [], 0, set()
+        labels, x, drawn, tops = [], 0, set(), []
+        below = ax.get_xaxis_transform()     # x in data, y in axes fractions
         for case in ("static", "dynamic"):
             for ff, mu in conditions:
                 for number, (arm, units) in enumerate(arms):
                     cell = t89_cell(case, arm, ff, mu, units)
-                    e = analysis.estimate(cell, key) if analysis.has(cell) else None
-                    if e is None or not e.n:
+                    if not analysis.has(cell):
+                        continue
+                    e = analysis.estimate(cell, key)
+                    where = x + (number - (len(arms) - 1) / 2) * width
+                    if e.missing:   # runs without the figure (never arrived) are said, not hidden
+                        ax.text(where, 0.02, f"{e.n}/{e.n + e.missing}", transform=below,
+                                rotation=90, fontsize=6, ha="center", va="bottom",
+                                color=COLOURS[arm])
+                    if not e.n:
                         continue
                     label = _LABEL[arm] + (", ki per sample" if units == "per_sample" else "")
                     err = [[e.mean - e.low], [e.high - e.mean]] if e.n > 1 else None
-                    ax.errorbar(x + (number - (len(arms) - 1) / 2) * width, e.mean, yerr=err,
+                    ax.errorbar(where, e.mean, yerr=err,
                                 fmt="o" if units == "per_second" else "s", capsize=2,
                                 color=COLOURS[arm],
                                 label=label if label not in drawn else None)
                     drawn.add(label)
+                    tops += [v for v in (e.mean, e.high) if np.isfinite(v)]
                 labels.append(f"{case}\n{_condition_text(ff, mu).replace(', ', chr(10))}")
                 x += 1
         ax.set_xticks(range(len(labels)), labels, fontsize=7)
         ax.set_yscale("symlog", linthresh=1e-3)
+        if tops:   # room above the highest finite bound (an infinite one runs off the top)
+            ax.set_ylim(top=2.0 * max(tops))
         ax.set(title=f"Fig. 17: {title}, estimate and 95 % interval", ylabel=title)
         ax.grid(True, alpha=0.3, which="both")
         if drawn:
             ax.legend(fontsize=7, ncol=3)
     return Figure("Fig. 17", "static and dynamic curvature tracking: error at arrival and path "
                   "RMSE by controller arm, feedforward and friction (symmetric-log axis, "
-                  "linear within 1 mm of zero)",
+                  "linear within 1 mm of zero); n/20 at the foot of a cell: the runs with a "
+                  "value (the others never arrived or failed)",
                   save(fig, out / "fig17_static_dynamic_comparison.png"),
                   [_LABEL[a] + (", ki per sample" if u == "per_sample" else "")
                    for a, u in arms])
