@@ -8,6 +8,9 @@ wraps: one fix per ``fix_period`` while the source emits, the last valid fix hel
 import math
 
 import numpy as np
+# numpy.random with the module (the core makes a generator): a first import inside an FMU call
+# can crash pythonfmu's binary
+import numpy.random  # noqa: F401
 
 from ..common.errors import InputError
 from ..common.faults import parse_schedule

@@ -89,6 +89,11 @@ int read_binding(const char *path, Binding *b, char *error, size_t size) {
         else if (n == 2 && strcmp(fields[0], "entry") == 0) slot = &b->entry;
         else if (n == 2 && strcmp(fields[0], "class") == 0) slot = &b->class_name;
         else if (n == 2 && strcmp(fields[0], "runtime") == 0) slot = &b->runtime;
+        if (n == 2 && strcmp(fields[0], "runtime_numpy") == 0) { /* a portable FMU's */
+            b->runtime_without_numpy = strcmp(fields[1], "no") == 0;
+            if (!b->runtime_without_numpy && strcmp(fields[1], "yes") != 0) { failed = 1; break; }
+            continue;
+        }
         if (slot != NULL) {
             free(*slot);
             if ((*slot = strdup(fields[1])) == NULL) { failed = 1; break; }

@@ -4,7 +4,8 @@
  *      an explicit choice is never passed over); libpython is derived from SONOTRACK_PYTHON
  *      when only that is set;
  *   2. the runtime a portable FMU carries (the binding table's runtime folder: its libpython,
- *      standard library and numpy, checked like any installation);
+ *      standard library and numpy, checked like any installation; numpy not when the table
+ *      says the runtime carries none, runtime_numpy no: that model does not import it);
  *   3. the Python and libpython recorded at build (resources/sonotrack_binding.txt);
  *   4. python3.<build minor> and python3 on PATH (every match, in PATH order);
  *   5. the standard libpython locations (/usr/lib/x86_64-linux-gnu, /usr/lib64, /usr/local/lib,
@@ -38,6 +39,7 @@ typedef struct {
     char *text;  /* the places tried, "; " separated */
     size_t size, used;
     int build_minor;
+    int without_numpy; /* the candidate being judged need not have numpy */
     char seen[16][PATH_MAX]; /* environments already judged (one environment, one line) */
     int nseen;
 } Search;
@@ -312,7 +314,8 @@ static int judge(Search *s, const char *origin, const char *python, const char *
             return 0;
         }
     }
-    if (!find_numpy(prefix, venv[0] ? venv : NULL, system, minor, why, sizeof why)) {
+    if (!s->without_numpy &&
+        !find_numpy(prefix, venv[0] ? venv : NULL, system, minor, why, sizeof why)) {
         note(s, "%s %s (Python 3.%d): %s", origin, shown, minor, why);
         return 0;
     }
@@ -375,7 +378,9 @@ int find_python(const Binding *b, const char *loaded, PythonChoice *choice, char
         if (b->runtime != NULL) {
             char file[PATH_MAX];
             pathf(file, "%s/lib/libpython3.%d.so.1.0", b->runtime, s->build_minor);
+            s->without_numpy = b->runtime_without_numpy;
             chosen = judge(s, "carried in the FMU", NULL, file, choice) == 1;
+            s->without_numpy = 0;
         } else {
             note(s, "carried in the FMU: none (not a portable build)");
         }

@@ -119,6 +119,7 @@ typedef struct {
 typedef struct {
     char *guid, *libpython, *python, *python_version, *package, *entry, *class_name;
     char *runtime; /* absolute folder of the Python runtime a portable FMU carries, or NULL */
+    int runtime_without_numpy; /* that runtime carries no numpy: the model needs none */
     Variable *vars; /* indexed by value reference */
     size_t nvars;
 } Binding;

@@ -6,7 +6,8 @@
    closure of their imports;
 2. lays out the runtime (:mod:`.runtime`): the build's libpython, those standard-library
    modules, numpy when the model imports it, under ``binaries/linux64/python/``;
-3. names that folder in the binding table (``runtime``), where the library looks for Python
+3. names that folder in the binding table (``runtime``, and ``runtime_numpy no`` when it
+   carries no numpy, which the model then does not need), where the library looks for Python
    right after the environment variables (docs/fmi_binary.md, "Finding Python"), writes what
    was recorded and carried to ``binaries/linux64/python/sonotrack_runtime.json`` and declares
    ``needsExecutionTool="false"`` in modelDescription.xml;
@@ -73,8 +74,11 @@ def make_portable(fmu_path):
             entries[f"{RUNTIME_FOLDER}/{inside}"] = data
         entries[MANIFEST] = json.dumps(manifest, indent=1).encode()
         table = entries[BINDING_FILE].decode()
-        table = re.sub(r"^runtime\t.*\n", "", table, flags=re.M)
-        entries[BINDING_FILE] = (table + f"runtime\t{RUNTIME_FOLDER}\n").encode()
+        table = re.sub(r"^runtime(_numpy)?\t.*\n", "", table, flags=re.M)
+        table += f"runtime\t{RUNTIME_FOLDER}\n"
+        if not with_numpy:  # the library then does not look for numpy in the runtime
+            table += "runtime_numpy\tno\n"
+        entries[BINDING_FILE] = table.encode()
         description = entries["modelDescription.xml"].decode()
         if 'needsExecutionTool="' not in description:
             raise BuildError(f"{fmu_path}: modelDescription.xml declares no needsExecutionTool")

@@ -1,9 +1,10 @@
 """The relocatable CPython runtime a portable FMU carries, and what goes into it.
 
 The runtime is the build's own Python 3.11 (its shared ``libpython``, the standard-library
-modules :mod:`.recording` says the model needs) and the venv's numpy, laid out as a Python
-installation under ``binaries/linux64/python/`` of the FMU, so that the interpreter finds its
-standard library from its own location::
+modules :mod:`.recording` says the model needs) and the venv's numpy if the model imports it
+(RobotPlant and CurvaturePlanner do not), laid out as a Python installation under
+``binaries/linux64/python/`` of the FMU, so that the interpreter finds its standard library
+from its own location::
 
     binaries/linux64/python/lib/libpython3.11.so.1.0
     binaries/linux64/python/lib/python3.11/os.pyc, json/ ...    the carried modules

@@ -1,10 +1,11 @@
 """Portable FMUs where no Python is installed: a Debian 12 minimal root (debootstrap, no Python).
 
 The C host is compiled for glibc 2.17 like the library and run in the root with chroot, on
-copies of the portable FMUs unzipped there: each FMU alone and all five in one process, outputs
-equal to fmpy's on this machine to 1e-12 (the same inputs, steps and outputs as every C-host
-test: tests/support/fmi_binary.py). An FMU whose carried libpython or numpy is gone refuses
-fmi2Instantiate with the one line naming what is missing and the fix, and the host lives on.
+copies of the portable FMUs unzipped there: each FMU alone and all five in one process (one
+without numpy first, and one with numpy first), outputs equal to fmpy's on this machine to
+1e-12 (the same inputs, steps and outputs as every C-host test: tests/support/fmi_binary.py).
+An FMU whose carried libpython or numpy is gone refuses fmi2Instantiate with the one line
+naming what is missing and the fix, and the host lives on.
 """
 
 import shutil
@@ -50,11 +51,23 @@ def test_each_portable_fmu_runs_alone_in_debian_12_without_python(
     check_host_run(completed, [name], portable_extracted)
 
 
+# RobotPlant and CurvaturePlanner carry no numpy (and fewer standard modules); the first FMU
+# instantiated starts the interpreter from its runtime, and a later FMU's runtime is added to
+# that interpreter's path: both orders
+WITHOUT_NUMPY = ["RobotPlant", "CurvaturePlanner"]
+WITH_NUMPY = ["SoundSource", "AcousticLocalizer", "WheelController"]
+
+
+@pytest.mark.parametrize("order", [WITHOUT_NUMPY + WITH_NUMPY, WITH_NUMPY[::-1] + WITHOUT_NUMPY],
+                         ids=["one without numpy first", "one with numpy first"])
 def test_all_five_portable_fmus_run_in_one_process_in_debian_12(
-        debian12, inside, portable_extracted):
-    text, _ = plan(None, _copy_in(inside, portable_extracted, NAMES))
+        debian12, inside, portable_extracted, order):
+    carries_numpy = [(portable_extracted[name][0] / RUNTIME_FOLDER / "lib" / "python3.11" /
+                      "site-packages" / "numpy").is_dir() for name in order]
+    assert carries_numpy == [name in WITH_NUMPY for name in order]
+    text, _ = plan(None, _copy_in(inside, portable_extracted, order))
     completed = run_in_root(debian12, inside[1], text)
-    check_host_run(completed, NAMES, portable_extracted)
+    check_host_run(completed, order, portable_extracted)
 
 
 def _one_line(completed, instance):
