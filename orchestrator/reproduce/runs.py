@@ -7,8 +7,8 @@ engine (Dask, local or a cluster) and one progress bar serve the whole study. Fi
 are stored by the hash of everything they read, so a second call (or a call after an
 interruption) recomputes nothing that is on disk. The finished runs are read back by
 ``orchestrator.run.read_results`` (the one reader of ``results.csv``) in as many processes as
-the study had workers: parsing 1,960 files took 49 s in one process before (measured 7 Dec on
-an idle machine, 25 ms a run).
+the study had workers (forked): parsing 1,960 files took 49 s in one process before (measured
+7 Dec on an idle machine, 25 ms a run).
 """
 
 import multiprocessing
@@ -155,15 +155,19 @@ def run_study(experiments, tolerances, runs, out_dir, fmu_dir=None, workers=None
 
 
 def _read_records(jobs, workers):
-    """:func:`_record` of every job, in order, in up to ``workers`` processes (spawned: the
-    sweep's engine may have left threads behind, which a fork would copy mid-state; each ends
-    with this process however it dies, as the sweep's workers do)."""
+    """:func:`_record` of every job, in order, in up to ``workers`` processes, each ending with
+    this process however it dies, as the sweep's workers do. Forked where the platform can (as
+    the sweep's engine does): spawned readers would run the caller's main script again, which a
+    script calling :func:`~orchestrator.reproduce.reproduce` without an ``if __name__ ==
+    "__main__"`` guard turns into a second study. By now the sweep's pool is closed; the
+    readers only read files."""
     from orchestrator.processes import die_with_parent
 
     processes = min(len(jobs) // 50, workers or os.cpu_count() or 1)
     if processes < 2:
         return [_record(*job) for job in jobs]
-    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn"),
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context(method),
                              initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
         return list(pool.map(_record_job, jobs, chunksize=max(1, len(jobs) // (8 * processes))))
 

@@ -1,0 +1,70 @@
+"""A function run in a forked child: its value, its failures, its end with the parent."""
+
+import doctest
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from orchestrator.processes import beside
+from orchestrator.processes.beside import Beside
+
+
+def test_the_child_reads_the_parents_memory_and_returns_its_value():
+    data = {"runs": [float(i) for i in range(200_000)]}   # not pickled: the child forks
+    pending = Beside(lambda: (os.getpid(), sum(data["runs"])))
+    pid, total = pending.result()
+    assert pid != os.getpid() and total == sum(range(200_000))
+
+
+def test_an_exception_in_the_child_is_raised_with_its_traceback():
+    def fails():
+        raise ValueError("figure 17 has no cells")
+    with pytest.raises(RuntimeError, match="ValueError: figure 17 has no cells"):
+        Beside(fails).result()
+
+
+def test_a_child_that_dies_is_never_taken_for_a_result():
+    with pytest.raises(RuntimeError, match=r"ended without a result \(exit code -9\)"):
+        Beside(lambda: os.kill(os.getpid(), signal.SIGKILL)).result()
+
+
+def test_the_child_ends_when_the_parent_is_killed(tmp_path):
+    pid_file = tmp_path / "child.pid"
+    script = textwrap.dedent(f"""
+        import os, time
+        from orchestrator.processes.beside import Beside
+        def work():
+            open({str(pid_file)!r}, "w").write(str(os.getpid()))
+            time.sleep(60)
+        Beside(work)
+        time.sleep(60)
+    """)
+    parent = subprocess.Popen([sys.executable, "-c", script], cwd=os.getcwd())
+    try:
+        for _ in range(100):
+            if pid_file.exists() and pid_file.read_text():
+                break
+            time.sleep(0.05)
+        child = int(pid_file.read_text())
+        parent.kill()
+        parent.wait(timeout=10)
+        for _ in range(40):   # the parent-death signal: well within a second
+            try:
+                os.kill(child, 0)
+            except ProcessLookupError:
+                break
+            time.sleep(0.05)
+        else:
+            os.kill(child, signal.SIGKILL)
+            pytest.fail("the child outlived its killed parent by 2 s")
+    finally:
+        parent.kill()
+
+
+def test_module_examples():
+    assert doctest.testmod(beside).failed == 0
