@@ -4,6 +4,7 @@ Two runs per cell, stop times x0.25 and two speeds: the numbers mean little, but
 table, claim, figure and report file is produced by the code path of the full study.
 """
 
+import copy
 import json
 import re
 
@@ -132,6 +133,42 @@ def test_html_report_shows_every_figure(study):
     assert seen["verdict_cells"] >= len(report.claims) and seen["unclassed_verdicts"] == []
 
 
+def _assert_room_heard(rows):
+    """The room's runs heard the room: their fixes err more than free field's in every cell.
+
+    Measured bearing RMSE, room / free field: 4.3-70 in the full study (least for Sec. 6.2
+    from 3 m, where the microphones' own offsets and skew already give 0.14 deg in free
+    field); in the reduced one (2 short runs a cell) down to 1.4 in a cell.
+    """
+    ratios = []
+    for row in rows:
+        free, room = (row["fix_bearing_rmse_deg"][c]["mean"] for c in ("free field", "room"))
+        assert room > free, row["cell"]
+        ratios.append(room / free)
+    assert ratios and sorted(ratios)[len(ratios) // 2] > 3.0, ratios
+
+
+def test_the_room_check_fails_when_the_room_runs_heard_free_field(study):
+    # the silent failure it guards against: a room condition whose runs ran in free field
+    # (the same fixes in both columns), or one cell whose room runs did
+    out, _ = study
+    rows = json.loads((out / "reproduction.json").read_text())["free_field_and_room"][
+        "fix_accuracy"]
+    _assert_room_heard(rows)
+    free_only = copy.deepcopy(rows)
+    for row in free_only:
+        row["fix_bearing_rmse_deg"]["room"] = dict(row["fix_bearing_rmse_deg"]["free field"])
+    with pytest.raises(AssertionError):
+        _assert_room_heard(free_only)
+    one_cell = copy.deepcopy(rows)
+    one_cell[-1]["fix_bearing_rmse_deg"]["room"] = dict(
+        one_cell[-1]["fix_bearing_rmse_deg"]["free field"])
+    with pytest.raises(AssertionError):
+        _assert_room_heard(one_cell)
+    with pytest.raises(AssertionError):
+        _assert_room_heard([])
+
+
 def test_every_fix_dependent_claim_is_judged_in_both_conditions_side_by_side(study):
     out, report = study
     data = json.loads((out / "reproduction.json").read_text())["free_field_and_room"]
@@ -148,16 +185,7 @@ def test_every_fix_dependent_claim_is_judged_in_both_conditions_side_by_side(stu
     assert data["room"]["parameters"]["localizer.room"] is True
     assert data["room"]["parameters"]["localizer.rt60"] == 0.4
     assert data["failed_runs"] == {}
-    # the room's runs heard the room: their fixes err more than free field's in every cell.
-    # Measured bearing RMSE, room / free field: 4.3-70 in the full study (least for Sec. 6.2
-    # from 3 m, where the microphones' own offsets and skew already give 0.14 deg in free
-    # field); in this reduced one (2 short runs a cell) down to 1.4 in a cell
-    ratios = []
-    for row in data["fix_accuracy"]:
-        free, room = (row["fix_bearing_rmse_deg"][c]["mean"] for c in ("free field", "room"))
-        assert room > free, row["cell"]
-        ratios.append(room / free)
-    assert sorted(ratios)[len(ratios) // 2] > 3.0, ratios
+    _assert_room_heard(data["fix_accuracy"])
     differing = [p for p in data["claims"] if p["differs"]]
     assert all(p["free_field"]["verdict"] != p["room"]["verdict"] for p in differing)
     assert all(p["why"].startswith("Measured: effect") for p in differing)
