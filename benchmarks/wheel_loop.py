@@ -46,20 +46,35 @@ from orchestrator.verify.designs import DESIGNS, design_settings  # noqa: E402
 from orchestrator.verify.requirement_runs import run_model_experiment  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results" / "wheel_loop.json"
+# The default form as it was before its speed observer: the encoder's window speed, the
+# integral of the error at 22 1/s, the fuzzy universe at one encoder count per window
+BEFORE_OBSERVER = {"speed_observer": 0.0, "integral_gain": 22.0, "fuzzy_e_range": 0.0259,
+                   "fuzzy_de_range": 0.432}
 SCENARIOS = ("s_curve", "straight", "static_case1", "dynamic_case2")
 
 
+def _commissioned(settings, plant, cell, req):
+    """``settings`` commissioned on the sampled wheel of ``cell`` (as verify judges)."""
+    from orchestrator.verify.commissioning import commission_model, commissioned
+
+    return commissioned(settings, commission_model(plant, cell, req["commissioning"]))
+
+
 def loop_figures(req):
-    """Settling at x0.25 / x1 / x4 gain, load recovery and creep, per design (τ x1)."""
+    """Settling at x0.25 / x1 / x4 gain, load recovery and creep, per design (tau x1), each
+    design commissioned on each wheel; the default form also as shipped (RobotPlant's
+    constants on every wheel)."""
     grid, plant = req["off_nominal_grid"], PlantParameters()
     out = {}
-    for design in DESIGNS:
-        settings = design_settings(dict(DEFAULTS), design)
+    for name, form, commission in (*((d, d, True) for d in DESIGNS),
+                                   ("default_uncommissioned", "default", False)):
+        settings = design_settings(dict(DEFAULTS), form)
 
-        def run(name, cell):
-            return run_model_experiment(name, settings, plant, cell, req, grid)
+        def run(requirement, cell):
+            own = _commissioned(settings, plant, cell, req) if commission else settings
+            return run_model_experiment(requirement, own, plant, cell, req, grid)
         creep = run("no_creep", (1.0, 1.0))
-        out[design] = {
+        out[name] = {
             "settling_s": {f"x{g:g}": _finite(run("off_nominal_settling", (g, 1.0))["value"])
                            for g in (0.25, 1.0, 4.0)},
             "load_recovery_s": _finite(run("load_step_recovery", (1.0, 1.0))["value"]),
@@ -197,9 +212,11 @@ SKIP_GAINS = ((1.2, 22.0), (1.2, 40.0), (0.9, 16.0), (1.2, 8.0), (0.6, 8.0), (0.
 
 def encoder_skip_tradeoff(req, fmu_dir, scratch, quick=False):
     """Peak body speed in ``faults/encoder_skip`` (bound 1.05 v_max = 0.42 m/s) against the
-    worst load-step recovery on the judged wheels, per default-form gain set; the paper form's
-    peak beside it. A half-counting encoder reads as a wheel at half speed, which the loop
-    answers as it answers a load, until the planner's odometry check stops the robot."""
+    worst load-step recovery on the judged wheels (each commissioned), for the shipped default
+    form and for the default form's gain sets before its speed observer (the integral of the
+    error instead); the paper form's peak beside it. A half-counting encoder reads as a wheel
+    at half speed, which the loop answers as it answers a load, until the planner's odometry
+    check stops the robot."""
     import numpy as np
 
     from orchestrator.run.results import read_results
@@ -213,16 +230,23 @@ def encoder_skip_tradeoff(req, fmu_dir, scratch, quick=False):
         result = _scenario_run("faults/encoder_skip", both, fmu_dir, scratch / f"skip_{tag}")
         return float(np.max(np.abs(read_results(result.results_csv)["plant.speed"])))
 
+    def worst_recovery(settings):
+        return max(run_model_experiment("load_step_recovery",
+                                        _commissioned(settings, plant, cell, req), plant, cell,
+                                        req, grid)["value"] for cell in judged_cells(grid))
+
+    sets = [{}] + [dict(BEFORE_OBSERVER, gain_scale=scale, integral_gain=integral)
+                   for scale, integral in (SKIP_GAINS[:2] if quick else SKIP_GAINS)]
     rows = []
-    for scale, integral in (SKIP_GAINS[:2] if quick else SKIP_GAINS):
-        settings = dict(DEFAULTS, gain_scale=scale, integral_gain=integral)
-        recovery = max(run_model_experiment("load_step_recovery", settings, plant, cell, req,
-                                            grid)["value"] for cell in judged_cells(grid))
-        rows.append({"gain_scale": scale, "integral_gain": integral,
-                     "peak_body_speed_m_s": peak({"gain_scale": scale,
-                                                  "integral_gain": integral},
-                                                 f"{scale}_{integral}"),
-                     "worst_load_recovery_s": _finite(recovery)})
+    for changes in sets:
+        settings = dict(DEFAULTS, **changes)
+        rows.append({"shipped": not changes,
+                     "speed_observer": settings["speed_observer"],
+                     "gain_scale": settings["gain_scale"],
+                     "integral_gain": settings["integral_gain"],
+                     "peak_body_speed_m_s": peak(changes, "_".join(
+                         f"{v:g}" for v in changes.values()) or "shipped"),
+                     "worst_load_recovery_s": _finite(worst_recovery(settings))})
     for row in rows:
         row["meets_both"] = (row["peak_body_speed_m_s"] <= 0.42 and row["worst_load_recovery_s"]
                              is not None and row["worst_load_recovery_s"] <= 1.0)
@@ -231,10 +255,12 @@ def encoder_skip_tradeoff(req, fmu_dir, scratch, quick=False):
 
 
 def slip_chatter_mechanism(req):
-    """Most slide entries in 1 s (requirement: <= 2) of the default form per judged wheel and
-    friction 0.05 / 0.1, on the RobotPlant core: as judged (728 counts, ramp at a_max); with a
-    10^6-count encoder (the speed quantum 19 um/s instead of 25.9 mm/s); and with the ramp at
-    mu g / 2 = 0.245 m/s^2 (728 counts)."""
+    """Most slide entries in 1 s (requirement: <= 2) per judged wheel and friction 0.05 / 0.1,
+    on the RobotPlant core: the shipped default form commissioned on each wheel; and the
+    default form before its speed observer (the encoder's window speed, the integral of the
+    error; RobotPlant's constants, as judged until then) with the real encoder, with a
+    10^6-count one (the speed quantum 19 um/s instead of 25.9 mm/s), and with the ramp at
+    mu g / 2 = 0.245 m/s^2: the mechanism the observer removes."""
     from dataclasses import replace
 
     from orchestrator.verify.requirement_runs import no_slip_chatter
@@ -242,19 +268,23 @@ def slip_chatter_mechanism(req):
 
     plant, grid = PlantParameters(), req["off_nominal_grid"]
     table = req["no_slip_chatter"]
-    cases = {"as_judged": (plant, table),
-             "fine_encoder": (replace(plant, encoder_ppr=1_000_000), table),
-             "ramp_half_mu_g": (plant, dict(table, acceleration_m_s2=0.245))}
+    before = dict(DEFAULTS, **BEFORE_OBSERVER)
+    frictions = dict(grid, frictions=[0.05, 0.1])
+    cases = {"before_observer": (plant, table),
+             "before_observer_fine_encoder": (replace(plant, encoder_ppr=1_000_000), table),
+             "before_observer_ramp_half_mu_g": (plant, dict(table, acceleration_m_s2=0.245))}
     rows = []
     for cell in judged_cells(grid):
-        row = {"gain_factor": cell[0], "time_constant_factor": cell[1]}
+        row = {"gain_factor": cell[0], "time_constant_factor": cell[1],
+               "shipped_commissioned": no_slip_chatter(
+                   _commissioned(dict(DEFAULTS), plant, cell, req), plant, cell, table,
+                   frictions)["per_friction"]}
         for name, (base, ramp) in cases.items():
-            result = no_slip_chatter(dict(DEFAULTS), base, cell, ramp,
-                                     dict(grid, frictions=[0.05, 0.1]))
-            row[name] = result["per_friction"]
+            row[name] = no_slip_chatter(before, base, cell, ramp, frictions)["per_friction"]
         rows.append(row)
+    names = ("shipped_commissioned", *cases)
     return {"rows": rows,
-            "worst": {name: max(max(r[name].values()) for r in rows) for name in cases}}
+            "worst": {name: max(max(r[name].values()) for r in rows) for name in names}}
 
 
 def settling_bound(req):
@@ -296,7 +326,8 @@ def main(argv=None):
     started = time.perf_counter()
     load_before = os.getloadavg()
     req = load_requirements()
-    out = {"designs": {name: DESIGNS[name] for name in DESIGNS}, "control_period_s": 0.02}
+    out = {"designs": {name: DESIGNS[name] for name in DESIGNS}, "control_period_s": 0.02,
+           "commissioning": dict(req["commissioning"], why=None)}
     out["loop"] = loop_figures(req)
     out["case1_overshoot_percent"] = case1_overshoot()
     with tempfile.TemporaryDirectory(prefix="wheel_loop_") as scratch:
@@ -323,13 +354,14 @@ def main(argv=None):
 def _print(out):
     def s(value, spec=".2f"):
         return "never" if value is None else format(value, spec)
-    print(f"{'design':8s} {'settle x0.25':>12s} {'x1':>6s} {'x4':>6s} {'load s':>7s} "
+    print(f"{'design':22s} {'settle x0.25':>12s} {'x1':>6s} {'x4':>6s} {'load s':>7s} "
           f"{'creep mm':>9s} {'Case 1 overshoot %':>19s}")
     for name, f in out["loop"].items():
-        st, over = f["settling_s"], out["case1_overshoot_percent"][name]
-        print(f"{name:8s} {s(st['x0.25']):>12s} {s(st['x1']):>6s} {s(st['x4']):>6s} "
+        st = f["settling_s"]
+        over = out["case1_overshoot_percent"].get(name)
+        print(f"{name:22s} {s(st['x0.25']):>12s} {s(st['x1']):>6s} {s(st['x4']):>6s} "
               f"{s(f['load_recovery_s']):>7s} {1000 * f['creep_m']:9.3f} "
-              f"{s(over['left'])} / {s(over['right'])}")
+              + (f"{s(over['left'])} / {s(over['right'])}" if over else ""))
     for case, designs in out["gain_spread_5_95"].items():
         for name, spread in designs.items():
             print(f"{case:14s} {name:8s} kp 5-95 % {spread['kp'][0]:.2f}..{spread['kp'][1]:.2f}"
@@ -344,19 +376,23 @@ def _print(out):
           f"{corners['both_hold']} of "
           f"{len(corners['designs'])} default-form gain sets meet both corners")
     for row in out["slip_chatter"]["rows"]:
+        def pair(name):
+            return f"{row[name]['0.05']} / {row[name]['0.1']}"
         print(f"slip chatter gain x{row['gain_factor']:g} tau x{row['time_constant_factor']:g}"
-              f" (mu 0.05 / 0.1): as judged {row['as_judged']['0.05']} / "
-              f"{row['as_judged']['0.1']}, 10^6 counts {row['fine_encoder']['0.05']} / "
-              f"{row['fine_encoder']['0.1']}, ramp mu g/2 {row['ramp_half_mu_g']['0.05']} / "
-              f"{row['ramp_half_mu_g']['0.1']}")
+              f" (mu 0.05 / 0.1): shipped, commissioned {pair('shipped_commissioned')}; before "
+              f"the observer {pair('before_observer')}, 10^6 counts "
+              f"{pair('before_observer_fine_encoder')}, ramp mu g/2 "
+              f"{pair('before_observer_ramp_half_mu_g')}")
     skip = out["encoder_skip"]
     for row in skip["default_form"]:
-        print(f"encoder_skip: gain_scale {row['gain_scale']:g} integral_gain "
-              f"{row['integral_gain']:g}: peak body {row['peak_body_speed_m_s']:.3f} m/s, "
+        print(f"encoder_skip: {'shipped' if row['shipped'] else 'before the observer'}, "
+              f"observer {row['speed_observer']:g} rad/s, gain_scale {row['gain_scale']:g}, "
+              f"integral_gain {row['integral_gain']:g}: peak body "
+              f"{row['peak_body_speed_m_s']:.3f} m/s, "
               f"worst load recovery {s(row['worst_load_recovery_s'])}"
               f"{'' if row['worst_load_recovery_s'] is None else ' s'}")
     print(f"encoder_skip: paper form peak {skip['paper_form_peak_m_s']:.3f} m/s; "
-          f"{skip['meets_both']} default-form gain sets meet both 0.42 m/s and 1 s")
+          f"{skip['meets_both']} of these default-form sets meet both 0.42 m/s and 1 s")
     bound = out["settling_bound"]
     own = [r["default_form_own_constants_s"] for r in bound["rows"]]
     print(f"settling bound: any controller needs at most {bound['largest_minimum_s']:.2f} s "

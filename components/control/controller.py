@@ -69,22 +69,29 @@ DEFAULTS = {
     "trim_ki": 0.5,
     "form": "default",
     "gain_scale": 1.2,
-    "integral_gain": 22.0,
+    # The speed observer's disturbance state is the integral action (0: no second one).
+    "integral_gain": 0.0,
     "derivative_time": 0.01,
-    # One encoder count per speed window, 2 pi r / ppr / speed_window = 25.9 mm/s, and the
-    # filtered derivative a one-count step gives, 25.9 mm/s / (tau + T) = 0.432 m/s^2: the
-    # smallest error the loop can see is the edge of the default form's fuzzy universe.
-    "fuzzy_e_range": 0.0259,
-    "fuzzy_de_range": 0.432,
+    # The smallest error the loop resolves is the edge of the default form's fuzzy universe:
+    # with the speed observer, the peak-to-peak of its estimate at a constant 0.3 m/s on
+    # RobotPlant's encoder, 2.6 mm/s (tests/unit/components/control/test_observer.py), and the
+    # filtered derivative a step of that size gives, 2.6 mm/s / (tau + T) = 0.0433 m/s^2.
+    # (Without the observer it was one encoder count per window: 25.9 mm/s, 0.432 m/s^2.)
+    "fuzzy_e_range": 0.0026,
+    "fuzzy_de_range": 0.0433,
     "acceleration_feedforward": _MECHANICAL_TIME_CONSTANT,
     "zero_reference_reset": True,
+    # The speed observer's rate (docs/control.md: 12 rad/s meets every off-nominal requirement
+    # on every wheel whose constants it is given; faster brings the encoder's toggles back).
+    "speed_observer": 12.0,
 }
 
 # The parameters only one form reads; every other parameter means the same in both.
 FORM_PARAMETERS = {
     "paper": ("trim_ki",),
     "default": ("gain_scale", "integral_gain", "derivative_time", "fuzzy_e_range",
-                "fuzzy_de_range", "acceleration_feedforward", "zero_reference_reset"),
+                "fuzzy_de_range", "acceleration_feedforward", "zero_reference_reset",
+                "speed_observer"),
 }
 
 
@@ -121,11 +128,12 @@ class WheelSpeedController:
     form : {"default", "paper"}
         The FGS-PD / PD design (module docstring); the PID is the CPID in both.
     gain_scale, integral_gain, derivative_time, fuzzy_e_range, fuzzy_de_range, \
-acceleration_feedforward, zero_reference_reset
+acceleration_feedforward, zero_reference_reset, speed_observer
         Default form (:class:`.DefaultFormLaw`): factor on the PD [1], integral gain on
         ``e`` [1/s], derivative time per unit kd [s], the fuzzy universe's edges [m/s,
-        m/s^2], the inertia feedforward's time [s] (0: off), and whether the integral is
-        emptied while ``v_ref`` is 0.
+        m/s^2], the inertia feedforward's time [s] (0: off), whether the integral is
+        emptied while ``v_ref`` is 0, and the speed observer's rate [rad/s] (0: off; it
+        needs ``acceleration_feedforward`` > 0 as its model's time constant).
 
     Raises
     ------
@@ -160,7 +168,8 @@ acceleration_feedforward, zero_reference_reset
             if not (math.isfinite(p[name]) and p[name] > 0.0):
                 problems.append(f"{name} = {p[name]!r} must be a positive finite number")
         for name in ("pid_kp", "pid_ki", "pid_kd", "pd_kp", "pd_kd", "derivative_time_constant",
-                     "trim_ki", "integral_gain", "derivative_time", "acceleration_feedforward"):
+                     "trim_ki", "integral_gain", "derivative_time", "acceleration_feedforward",
+                     "speed_observer"):
             if not (math.isfinite(p[name]) and p[name] >= 0.0):
                 problems.append(f"{name} = {p[name]!r} must be finite and >= 0")
         for name in ("kp", "kd"):
@@ -168,6 +177,10 @@ acceleration_feedforward, zero_reference_reset
                 check_gain_range(name, p[name + "_min"], p[name + "_max"])
             except ParameterError as exc:
                 problems.append(str(exc))
+        if p["speed_observer"] > 0.0 and not p["acceleration_feedforward"] > 0.0:
+            problems.append(f"speed_observer = {p['speed_observer']!r} needs the wheel's time "
+                            "constant: acceleration_feedforward must be > 0 (it is "
+                            f"{p['acceleration_feedforward']!r})")
         if problems:
             raise ParameterError("WheelController parameters: " + "; ".join(problems))
 
@@ -190,7 +203,7 @@ acceleration_feedforward, zero_reference_reset
             self.default_law = DefaultFormLaw(
                 self.volts_per_speed, p["gain_scale"], p["derivative_time"],
                 p["integral_gain"], p["acceleration_feedforward"], self.feedforward,
-                p["zero_reference_reset"], self.v_supply)
+                p["zero_reference_reset"], self.v_supply, p["speed_observer"])
         else:
             self.scheduler = FuzzyGainScheduler(self.e_range, self.de_range,
                                                 method=p["fuzzy_method"])
@@ -256,6 +269,8 @@ acceleration_feedforward, zero_reference_reset
             if supply < limit:
                 limit = supply
         law = self.default_law
+        if law is not None:
+            v_meas = law.measured_speed(v_meas, h, self.voltage)
         error = (v_ref if law is None else law.tracked_reference(v_ref)) - v_meas
         rate = self.derivative.update(error, h)
         if law is not None:

@@ -1,9 +1,11 @@
-"""The default form of the FGS-PD and PD laws: model feedforward, scaled PD, integral, stop reset.
+"""The default form of the FGS-PD and PD laws: model feedforward, speed observer, scaled PD,
+stop reset.
 
 Written out in physical units (``g = volts_per_speed``, ``e = v_ref - v_meas``, ``de`` its
 filtered derivative)::
 
     V = clip( g v_ref + g tau_a dv_ref/dt                 [feedforward: motor model]
+              - g d                                        [observed disturbance]
               + g s (kp e + kd T_d de)                     [the paper's PD, scaled by s]
               + g k_i integral(e dt),                      [integral of the speed error]
               +-limit )
@@ -25,9 +27,18 @@ filtered derivative)::
 - The fuzzy scheduler reads ``e / fuzzy_e_range`` and ``de / fuzzy_de_range``: the universe
   is sized to the errors the loop sees (docs/control.md); ``e_range`` and ``de_range`` are
   the paper form's (and the PID's) normalisation and are not read here.
+- ``speed_observer`` [rad/s] (0: off): the error is taken against the rim speed a
+  :class:`.observer.SpeedObserver` estimates between encoder counts (its model: ``g`` and
+  ``tau_a``; its three error poles at that rate), compared with the reference model's speed
+  rather than its window average; and the voltage ``g d`` of the disturbance it estimates
+  (a load, friction, another motor constant) is taken away, except while the reference is
+  held at zero (with ``zero_reference_reset``): the observer's disturbance state is then
+  the loop's integral action, and ``integral_gain`` (default 0) would add a second one.
 """
 
 import math
+
+from .observer import SpeedObserver
 
 __all__ = ["DefaultFormLaw"]
 
@@ -53,6 +64,8 @@ class DefaultFormLaw:
         Empty and hold the integral while ``v_ref == 0``.
     v_supply : float
         The clamp of the integral term [V].
+    speed_observer : float, optional
+        The speed observer's rate [rad/s]; 0: the encoder's window speed is used as it is.
 
     Attributes
     ----------
@@ -60,10 +73,12 @@ class DefaultFormLaw:
         ``I``, the integral of ``e`` [m].
     previous_reference : float or None
         ``v_ref`` of the last step (None before the first).
+    observer : SpeedObserver or None
     """
 
     def __init__(self, volts_per_speed, gain_scale, derivative_time, integral_gain,
-                 acceleration_feedforward, feedforward, zero_reference_reset, v_supply):
+                 acceleration_feedforward, feedforward, zero_reference_reset, v_supply,
+                 speed_observer=0.0):
         self.g = float(volts_per_speed)
         self.proportional = self.g * float(gain_scale)
         self.derivative_time = float(derivative_time)
@@ -77,6 +92,8 @@ class DefaultFormLaw:
         self.model_speed = self.model_measured = 0.0
         self._model_step = None
         self._model_decay = self._model_gain = self._model_average = 0.0
+        self.observer = (SpeedObserver(self.g, acceleration_feedforward, speed_observer)
+                         if speed_observer > 0.0 else None)
 
     def tracked_reference(self, v_ref):
         """The speed the measurement is compared with [m/s].
@@ -86,11 +103,22 @@ class DefaultFormLaw:
         (``g``, ``tau_a``) would report under the feedforward alone. On such a wheel the
         feedback then sees no error at all, after a step as on a ramp, instead of acting a
         second time on what the feedforward already does; on any other wheel it sees
-        exactly the difference. Without the inertia term, ``v_ref`` itself.
+        exactly the difference. Without the inertia term, ``v_ref`` itself. With the speed
+        observer, the model's speed at this instant (what the observer estimates), not its
+        window average.
         """
         if self.acceleration_time:
-            return self.model_measured
+            return self.model_measured if self.observer is None else self.model_speed
         return v_ref
+
+    def measured_speed(self, v_meas, h, voltage):
+        """The speed the error is taken against: ``v_meas``, or the observer's estimate.
+
+        ``voltage`` is the one held over the period that just ended (the last output).
+        """
+        if self.observer is None:
+            return v_meas
+        return self.observer.update(v_meas, h, voltage)
 
     def output(self, v_ref, error, rate, kp, kd, h, limit):
         """One step: the clipped voltage [V]; advances the integral and the reference memory.
@@ -115,9 +143,13 @@ class DefaultFormLaw:
             else:
                 offset = g * v_ref
         self.previous_reference = v_ref
+        stopped = self.zero_reference_reset and v_ref == 0.0
+        if self.observer is not None and not stopped:
+            # the voltage the estimated disturbance takes away (the observer's integral action)
+            offset -= g * self.observer.disturbance
         pd = self.proportional * (kp * error + kd * self.derivative_time * rate)
         ki = self.integral_gain
-        if self.zero_reference_reset and v_ref == 0.0:
+        if stopped:
             self.integral = 0.0
         elif ki > 0.0:
             candidate = self.integral + error * h
@@ -159,3 +191,5 @@ class DefaultFormLaw:
         self.integral = 0.0
         self.previous_reference = None
         self.model_speed = self.model_measured = 0.0
+        if self.observer is not None:
+            self.observer.reset()

@@ -19,7 +19,7 @@ from components.common.errors import ConfigError
 from components.control.controller import DEFAULTS as CONTROLLER_DEFAULTS
 from components.control.controller import FORM_PARAMETERS
 
-__all__ = ["DESIGNS", "DESIGN_LABELS", "design_settings", "is_default_form", "loop_gains",
+__all__ = ["DESIGNS", "DESIGN_LABELS", "OFF_NOMINAL_DESIGNS", "UNCOMMISSIONED", "design_settings", "is_default_form", "loop_gains",
            "loop_model", "integral_gain"]
 
 DESIGNS = {
@@ -28,7 +28,14 @@ DESIGNS = {
     "pid": {"mode": "pid"},
 }
 DESIGN_LABELS = {"default": "FGS-PD, default form", "paper": "FGS-PD, paper form",
-                 "pid": "CPID (the paper's PID)"}
+                 "pid": "CPID (the paper's PID)",
+                 "default_uncommissioned": "FGS-PD, default form, RobotPlant's constants"}
+# The off-nominal requirements judge every design commissioned on each wheel
+# (orchestrator/verify/commissioning.py), and show the default form also as shipped, told
+# RobotPlant's constants whatever the wheel (a finding: what commissioning buys).
+OFF_NOMINAL_DESIGNS = {"default": "default", "paper": "paper", "pid": "pid",
+                       "default_uncommissioned": "default"}
+UNCOMMISSIONED = ("default_uncommissioned",)
 
 
 def design_settings(settings, design):
@@ -90,7 +97,8 @@ def loop_gains(settings, kp, kd):
 
 
 def loop_model(model, settings):
-    """``model`` with the feedforward of ``settings``' form (the default form's inertia term).
+    """``model`` with the feedforward of ``settings``' form (the default form's inertia term
+    and speed observer).
 
     Parameters
     ----------
@@ -101,7 +109,9 @@ def loop_model(model, settings):
     -------
     WheelLoopModel
     """
-    inertia = (float(settings["acceleration_feedforward"]) if is_default_form(settings)
-               else 0.0)
+    default = is_default_form(settings)
+    inertia = float(settings["acceleration_feedforward"]) if default else 0.0
+    observer = float(settings.get("speed_observer", 0.0)) if default else 0.0
     return replace(model, feedforward=bool(settings["feedforward"]),
-                   acceleration_feedforward=inertia)
+                   acceleration_feedforward=inertia, speed_observer=observer,
+                   observer_time_constant=inertia if observer else 0.0)

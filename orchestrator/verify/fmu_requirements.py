@@ -191,8 +191,10 @@ _RUNS = {"off_nominal_settling": _settling, "load_step_recovery": _load_recovery
          "no_limit_cycle": _limit_cycle, "no_slip_chatter": _slip_chatter}
 
 
-def fmu_requirements(designs, plant, req, cells, fmu_dir=None):
-    """The FMU experiments of every design on ``cells``.
+def fmu_requirements(designs, plant, req, cells, fmu_dir=None, commission=True):
+    """The FMU experiments of every design on ``cells``, each design commissioned on each
+    wheel through the FMUs first (:func:`.commissioning.commission_fmu`; ``commission``
+    False: the designs' parameters as they are).
 
     Parameters
     ----------
@@ -214,18 +216,24 @@ def fmu_requirements(designs, plant, req, cells, fmu_dir=None):
     """
     from .fmu_runs import built_fmu
 
+    from .commissioning import commission_fmu, commissioned
+
     grid = req["off_nominal_grid"]
     results = {}
     with tempfile.TemporaryDirectory(prefix="sonotrack_verify_") as scratch:
         folder = fmu_dir or scratch
         loop = FmuLoop(built_fmu("RobotPlant", folder), built_fmu("WheelController", folder))
         try:
+            fits = {cell: commission_fmu(loop, X.plant_variant_parameters(*cell, base=plant),
+                                         req["commissioning"])
+                    for cell in cells} if commission else {}
             for design, settings in designs.items():
                 results[design] = {}
                 for name in X.FMU_REQUIREMENTS:
                     rows = []
                     for cell in cells:
-                        result = _RUNS[name](loop, settings, plant, cell, req[name], grid)
+                        own = commissioned(settings, fits[cell]) if commission else settings
+                        result = _RUNS[name](loop, own, plant, cell, req[name], grid)
                         value = result["value"]
                         result.update(value=float(value) if math.isfinite(value) else math.inf,
                                       passed=bool(result["passed"]), gain_factor=cell[0],

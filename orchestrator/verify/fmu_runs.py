@@ -178,7 +178,8 @@ def controller_law_reference(settings, inputs, h):
     Independent of :class:`components.control.WheelSpeedController` except for the fuzzy
     scheduler's normalised gains (the scheduler is checked against scikit-fuzzy in the unit
     tests): its own backward-Euler derivative, integrator with conditional integration and
-    clamp, feedforward, the default form's reference model and reset, and clipping.
+    clamp, feedforward, the default form's reference model, speed observer and reset, and
+    clipping.
 
     Parameters
     ----------
@@ -209,9 +210,16 @@ def controller_law_reference(settings, inputs, h):
     integral, rate, previous = 0.0, 0.0, None
     model_speed, model_window = 0.0, 0.0
     tau_a = s["acceleration_feedforward"] if default and s["feedforward"] else 0.0
+    observer = (_ObserverReference(g, s["acceleration_feedforward"], s["speed_observer"], h)
+                if default and s.get("speed_observer", 0.0) > 0.0 else None)
+    voltage = 0.0
     out = []
     for v_ref, v_meas in inputs:
-        tracked = model_window if tau_a else v_ref
+        if observer is not None:
+            v_meas = observer.update(v_meas, voltage)
+            tracked = model_speed if tau_a else v_ref
+        else:
+            tracked = model_window if tau_a else v_ref
         error = tracked - v_meas
         rate = 0.0 if previous is None else (tau * rate + error - previous) / (tau + h)
         previous = error
@@ -234,6 +242,8 @@ def controller_law_reference(settings, inputs, h):
                 model_window = c * model_speed + (1 - c) * drive
                 model_speed = a * model_speed + (1 - a) * drive
                 offset = g * drive
+            if observer is not None and not (s["zero_reference_reset"] and v_ref == 0.0):
+                offset -= g * observer.state[2]
             proportional = g * s["gain_scale"] * (kp * error + kd * s["derivative_time"] * rate)
             increment = error * h
         else:
@@ -249,8 +259,40 @@ def controller_law_reference(settings, inputs, h):
             if not ((raw > limit and error > 0.0) or (raw < -limit and error < 0.0)):
                 integral = candidate
         raw = offset + proportional + per_integral * integral
-        out.append((min(max(raw, -limit), limit), kp, kd, e_n, de_n))
+        voltage = min(max(raw, -limit), limit)
+        out.append((voltage, kp, kd, e_n, de_n))
     return out
+
+
+class _ObserverReference:
+    """The default form's speed observer, recomputed: the wheel ``dx = u``,
+    ``tau du = (V / g + d - u) dt``, ``dd = 0`` sampled by a matrix exponential, the current
+    estimator's gains by Ackermann's formula for a triple pole at ``exp(-rate h)`` with numpy
+    (not the closed forms and hand-written 3 x 3 algebra of the controller's own)."""
+
+    def __init__(self, g, tau, rate, h):
+        from scipy.linalg import expm
+
+        continuous = np.zeros((4, 4))
+        continuous[0, 1] = 1.0
+        continuous[1, 1], continuous[1, 2], continuous[1, 3] = -1 / tau, 1 / tau, 1 / tau
+        sampled = expm(continuous * h)
+        self.a, self.b = sampled[:3, :3], sampled[:3, 3]
+        c = np.array([1.0, 0.0, 0.0])
+        observability = np.array([c @ np.linalg.matrix_power(self.a, k) for k in (1, 2, 3)])
+        pole = math.exp(-rate * h)
+        phi = np.linalg.matrix_power(self.a - pole * np.eye(3), 3)
+        self.gains = phi @ np.linalg.solve(observability, [0.0, 0.0, 1.0])
+        self.g = g
+        self.state = np.zeros(3)
+        self.position = 0.0
+        self.h = h
+
+    def update(self, v_meas, voltage):
+        predicted = self.a @ self.state + self.b * (voltage / self.g)
+        self.position += v_meas * self.h
+        self.state = predicted + self.gains * (self.position - predicted[0])
+        return float(self.state[1])
 
 
 def _controller_inputs(settings, samples, seed):

@@ -210,6 +210,11 @@ class WheelLoopModel:
     gain_factor, time_constant_factor : float, optional
         The wheel the controller drives, relative to RobotPlant's (see
         :meth:`LinearWheelModel.scaled`); the controller's constants stay as given.
+    speed_observer, observer_time_constant : float, optional
+        The default form's speed observer (:class:`components.control.observer.SpeedObserver`):
+        its poles' rate [rad/s] (0: none) and its model's time constant [s]. The law then
+        compares the observer's speed with the reference model's speed (``r / z``) and takes
+        away ``g`` times the observed disturbance (:meth:`observer_polys`).
     """
 
     plant: PlantParameters = field(default_factory=PlantParameters)
@@ -223,6 +228,8 @@ class WheelLoopModel:
     extra_delay: int = 0
     gain_factor: float = 1.0
     time_constant_factor: float = 1.0
+    speed_observer: float = 0.0
+    observer_time_constant: float = 0.0
 
     def __post_init__(self):
         if self.period is None:
@@ -240,6 +247,11 @@ class WheelLoopModel:
                 and self.acceleration_feedforward >= 0):
             problems.append(f"acceleration_feedforward = {self.acceleration_feedforward!r} "
                             "must be finite and >= 0")
+        if not (math.isfinite(self.speed_observer) and self.speed_observer >= 0):
+            problems.append(f"speed_observer = {self.speed_observer!r} must be finite and >= 0")
+        elif self.speed_observer > 0 and not self.observer_time_constant > 0:
+            problems.append(f"observer_time_constant = {self.observer_time_constant!r} must be "
+                            "> 0 with a speed observer")
         if int(self.extra_delay) != self.extra_delay or self.extra_delay < 0:
             problems.append(f"extra_delay = {self.extra_delay!r} must be an integer >= 0")
         if problems:
@@ -277,8 +289,59 @@ class WheelLoopModel:
         return g * numerator, denominator
 
     # -- polynomials ---------------------------------------------------------------------
+    def observer_polys(self):
+        """The speed observer as polynomials in z: ``(Do, Nuv, Ndv, Nuy, Ndy)``.
+
+        The observer's speed and disturbance estimates are ``u = (Nuv V + Nuy Vm) / Do`` and
+        ``d = (Ndv V + Ndy Vm) / Do`` (``V`` the voltage, ``Vm`` the measured speed). It is
+        the current estimator of :class:`components.control.observer.SpeedObserver`:
+        ``x_k = (I - L C)(A x_k-1 + B V_k-1 / g) + L p_k`` on the position
+        ``p = T z / (z - 1) Vm`` the measured speeds add up to; its response to ``p`` has a
+        zero at ``z = 1`` (a constant position is a wheel at rest), which cancels that
+        integrator (checked).
+        """
+        from components.control.observer import SpeedObserver
+
+        observer = SpeedObserver(self.volts_per_speed, self.observer_time_constant,
+                                 self.speed_observer)
+        transition, drive, gains = (np.array(m, dtype=float)
+                                    for m in observer.matrices(self.period))
+        correct = np.eye(3) - np.outer(gains, [1.0, 0.0, 0.0])
+        closed = correct @ transition
+        per_volt = (correct @ drive / self.volts_per_speed)[:, None]
+        polys = []
+        for row in (1, 2):
+            pick = np.eye(3)[row:row + 1]
+            num_v, den = _ss_to_poly(closed, per_volt, pick, 0.0)
+            num_p, _ = _ss_to_poly(closed, gains[:, None], pick, 0.0)
+            # p = T z / (z - 1) Vm, and the estimator reads p_k through z L: T z^2 / (z - 1)
+            quotient, remainder = np.polydiv(num_p, [1.0, -1.0])
+            if np.max(np.abs(remainder)) > 1e-9 * max(1.0, np.max(np.abs(num_p))):
+                raise ConfigError("speed observer: its response to position has no zero at "
+                                  f"z = 1 (remainder {remainder})")
+            polys.append((num_v, self.period * np.polymul(quotient, [1.0, 0.0, 0.0])))
+        (nuv, nuy), (ndv, ndy) = polys
+        return den, nuv, ndv, nuy, ndy
+
+    def _observed_loop(self, kp, kd, ki):
+        """``(A, B)``: the law with the observer is ``V A = (F + C M) r Dc Do - B Vm`` over
+        ``Dc Do``: ``A = Dc Do + Nc Nuv + g Dc Ndv``, ``B = Nc Nuy + g Dc Ndy``."""
+        nc, dc = self.controller_poly(kp, kd, ki)
+        do, nuv, ndv, nuy, ndy = self.observer_polys()
+        g = self.volts_per_speed
+        own = np.polyadd(np.polyadd(np.polymul(dc, do), np.polymul(nc, nuv)),
+                         g * np.polymul(dc, ndv))
+        measured = np.polyadd(np.polymul(nc, nuy), g * np.polymul(dc, ndy))
+        return own, measured
+
     def characteristic_polynomial(self, kp, kd, ki=0.0):
-        """``Dc Dm + Nc Nm``: the closed-loop characteristic polynomial in z."""
+        """``Dc Dm + Nc Nm``: the closed-loop characteristic polynomial in z.
+
+        With the speed observer, ``A Dm + B Nm`` (:meth:`_observed_loop`).
+        """
+        if self.speed_observer:
+            own, measured = self._observed_loop(kp, kd, ki)
+            return np.polyadd(np.polymul(own, self.meas_den), np.polymul(measured, self.meas_num))
         nc, dc = self.controller_poly(kp, kd, ki)
         return np.polyadd(np.polymul(dc, self.meas_den), np.polymul(nc, self.meas_num))
 
@@ -296,7 +359,10 @@ class WheelLoopModel:
         receives, so it scales the plant's numerator and nothing else: ``Dc Dm + G Nc Nm1``
         with ``Nm1`` the measured-speed numerator at ``G = 1``.
         """
-        nc, dc = self.controller_poly(kp, kd, ki)
+        if self.speed_observer:
+            dc, nc = self._observed_loop(kp, kd, ki)
+        else:
+            nc, dc = self.controller_poly(kp, kd, ki)
         base = np.polymul(dc, self.meas_den)
         per_gain = np.polymul(nc, self.meas_num) / self.gain_factor
         length = max(base.size, per_gain.size)
@@ -316,7 +382,14 @@ class WheelLoopModel:
         return control.tf(num, den, self.period)
 
     def loop_tf(self, kp, kd, ki=0.0):
-        """Open loop ``C(z) H(z)`` (voltage law times measured-speed path), for margins."""
+        """Open loop ``C(z) H(z)`` (voltage law times measured-speed path), for margins.
+
+        With the speed observer, broken at the plant's input (the observer still reads the
+        law's own voltage): ``B H / A`` (:meth:`_observed_loop`).
+        """
+        if self.speed_observer:
+            own, measured = self._observed_loop(kp, kd, ki)
+            return self._tf(np.polymul(measured, self.meas_num), np.polymul(own, self.meas_den))
         nc, dc = self.controller_poly(kp, kd, ki)
         return self._tf(np.polymul(nc, self.meas_num), np.polymul(dc, self.meas_den))
 
@@ -331,7 +404,16 @@ class WheelLoopModel:
         # F + C = (F Dc + Nc) / Dc; 1 + C H = (Dc Dm + Nc Nm) / (Dc Dm).
         drive = np.polyadd(forward * dc, nc)
         characteristic = self.characteristic_polynomial(kp, kd, ki)
-        if self.feedforward and self.acceleration_feedforward:
+        if self.speed_observer:
+            # V A = (F + C M) Dc Do r - B Vm with M = 1 / z (the reference model's speed)
+            # when the inertia term is on, else 1: V = (F + C M) Dc Do Dm / char r.
+            do = self.observer_polys()[0]
+            if self.feedforward and self.acceleration_feedforward:
+                nf, _ = self.reference_model()
+                drive = np.polyadd(np.polymul(nf, dc), nc)        # (F + C / z) z Dc
+                characteristic = np.polymul(characteristic, [1.0, 0.0])
+            drive = np.polymul(drive, do)
+        elif self.feedforward and self.acceleration_feedforward:
             # F = Nf / z and M = Nr / z^2: F + C M = (Nf z Dc + Nc Nr) / (z^2 Dc); the z^2
             # divides the closed loop's numerator, so it multiplies its denominator.
             nf, nr = self.reference_model()

@@ -25,7 +25,8 @@ from orchestrator.report.markdown import write_markdown
 from . import checks as C
 from . import robust_checks as R
 from . import measure
-from .designs import DESIGNS, design_settings, integral_gain
+from .designs import (OFF_NOMINAL_DESIGNS, UNCOMMISSIONED, design_settings,
+                      integral_gain)
 from .fmu_requirements import fmu_requirements
 from .requirement_checks import design_lines, requirement_checks
 from .requirement_runs import measure_requirements
@@ -236,12 +237,17 @@ def off_nominal(settings, plant, req, fmu=True, fmu_dir=None):
     """
     grid = req["off_nominal_grid"]
     judged = judged_cells(grid)
-    designs = {name: design_settings(settings, name) for name in DESIGNS}
+    designs = {name: design_settings(settings, form)
+               for name, form in OFF_NOMINAL_DESIGNS.items()}
     result = {"judged": judged, "grid": dict(grid),
-              "model": {name: measure_requirements(s, plant, req) for name, s in designs.items()},
+              "model": {name: measure_requirements(s, plant, req,
+                                                   commission=name not in UNCOMMISSIONED)
+                        for name, s in designs.items()},
               "fmu": {}}
     if fmu:
-        result["fmu"] = fmu_requirements(designs, plant, req, judged, fmu_dir=fmu_dir)
+        result["fmu"] = fmu_requirements(
+            {name: s for name, s in designs.items() if name not in UNCOMMISSIONED}, plant, req,
+            judged, fmu_dir=fmu_dir)
     return result
 
 

@@ -12,8 +12,8 @@ first screen.
 import math
 
 from .checks import Check
-from .designs import DESIGN_LABELS
-from .wheel_experiments import REQUIREMENTS
+from .designs import DESIGN_LABELS, UNCOMMISSIONED
+from .wheel_experiments import REQUIREMENTS, judged_words
 
 __all__ = ["check_requirement", "largest_ranges", "design_lines", "REQUIREMENT_LABELS",
            "format_value", "requirement_checks", "span_words"]
@@ -186,10 +186,10 @@ def check_requirement(name, design, model_rows, fmu_rows, grid, table, judged,
     return Check(name=f"{name}_{design}",
                  title=f"{table['title']} ({DESIGN_LABELS[design]})",
                  requirement=f"{_threshold(name, table)} on the {len(on_judged)} judged "
-                             "wheels (gain, tau and gain/tau within "
-                             f"x{1 / grid['judged_factor_span']:g}..x"
-                             f"{grid['judged_factor_span']:g}), on the loop and through the "
-                             "FMUs",
+                             f"wheels ({judged_words(grid)}), "
+                             + ("as shipped (RobotPlant's constants), on the loop"
+                                if design in UNCOMMISSIONED else
+                                "each commissioned first, on the loop and through the FMUs"),
                  measured=measured, passed=not failing and not fmu_failing,
                  severity=severity,
                  values={"worst": worst["value"], "failing": len(failing),

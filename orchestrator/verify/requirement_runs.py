@@ -137,7 +137,7 @@ def run_model_experiment(name, settings, plant, cell, req, grid):
     return result
 
 
-def measure_requirements(settings, plant, req, cells=None):
+def measure_requirements(settings, plant, req, cells=None, commission=True):
     """Every off-nominal requirement on every cell of the grid (or ``cells``).
 
     Parameters
@@ -147,20 +147,34 @@ def measure_requirements(settings, plant, req, cells=None):
     plant : PlantParameters
         RobotPlant's (the grid scales it).
     req : dict
-        The requirements file's tables (``off_nominal_grid`` and the six of
-        :data:`.wheel_experiments.REQUIREMENTS`).
+        The requirements file's tables (``off_nominal_grid``, ``commissioning`` and the six
+        of :data:`.wheel_experiments.REQUIREMENTS`).
     cells : list of (float, float), optional
         Default: the whole evaluated grid.
+    commission : bool, optional
+        Commission the controller on each wheel first (:mod:`.commissioning`; the
+        ``commissioning`` table must be there); False: ``settings`` as they are.
 
     Returns
     -------
     dict
         Requirement -> list of ``{"gain_factor", "time_constant_factor", "value",
-        "passed", ...}``.
+        "passed", ...}``; commissioned rows carry the constants found
+        (``commissioned_volts_per_speed``, ``commissioned_time_constant``).
     """
+    from .commissioning import commission_model, commissioned
+
     grid = req["off_nominal_grid"]
     cells = X.grid_cells(grid) if cells is None else cells
-    return {name: [dict(run_model_experiment(name, settings, plant, cell, req, grid),
-                        gain_factor=cell[0], time_constant_factor=cell[1])
+    per_cell, extra = {}, {}
+    for cell in cells:
+        per_cell[cell], extra[cell] = settings, {}
+        if commission:
+            fit = commission_model(plant, cell, req["commissioning"])
+            per_cell[cell] = commissioned(settings, fit)
+            extra[cell] = {"commissioned_volts_per_speed": fit.volts_per_speed,
+                           "commissioned_time_constant": fit.time_constant}
+    return {name: [dict(run_model_experiment(name, per_cell[cell], plant, cell, req, grid),
+                        gain_factor=cell[0], time_constant_factor=cell[1], **extra[cell])
                    for cell in cells]
             for name in X.REQUIREMENTS}

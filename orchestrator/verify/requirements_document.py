@@ -10,12 +10,12 @@ from orchestrator.report.document import Code, Column, Verdict
 
 from .designs import DESIGN_LABELS
 from .requirement_checks import design_lines, format_value, largest_ranges, span_words
-from .wheel_experiments import REQUIREMENTS
+from .wheel_experiments import REQUIREMENTS, judged_words
 
 __all__ = ["off_nominal_section", "summary_findings", "is_off_nominal_finding"]
 
 _TONES = {"pass": "pass", "FAIL": "fail", "warning": "warn"}
-_SHORT = {"default": "d", "paper": "p", "pid": "pid"}
+_SHORT = {"default": "d", "paper": "p", "pid": "pid", "default_uncommissioned": "d0"}
 
 
 def is_off_nominal_finding(check):
@@ -66,10 +66,12 @@ def off_nominal_section(document, report):
         f"x{min(grid['time_constant_factors']):g}..x{max(grid['time_constant_factors']):g}, "
         "on the discrete-time loop (the real controller on the sampled wheel; the RobotPlant "
         "core for slip) and through the FMUs in our master (RobotPlant scaled + two "
-        "WheelController FMUs) on the judged wheels: gain, time constant and their ratio within "
-        f"x{1 / grid['judged_factor_span']:g}..x{grid['judged_factor_span']:g} "
-        f"({len(results['judged'])} wheels). The verdict is on the judged wheels; the ranges "
-        "say how far it holds on the whole grid (docs/verification.md).")
+        f"WheelController FMUs) on the judged wheels: {judged_words(grid)} "
+        f"({len(results['judged'])} wheels). Every design is commissioned on each wheel first "
+        "(its constants from a voltage step, orchestrator/verify/commissioning.py); the "
+        "default form is also shown as shipped, told RobotPlant's constants. The verdict is on "
+        "the judged wheels; the ranges say how far it holds on the whole grid "
+        "(docs/verification.md).")
     section.bullets(design_lines(report.checks))
     for name in REQUIREMENTS:
         rows = []
@@ -98,7 +100,8 @@ def off_nominal_section(document, report):
                   [[f"x{t:g}"] + [" | ".join(
                       f"{_SHORT[d]} {_cell(name, by[d][(g, t)])}" for d in by)
                       for g in gains] for t in taus],
-                  caption="Loop values per wheel (d: default form, p: paper form, pid: CPID; "
+                  caption="Loop values per wheel (d: default form, p: paper form, pid: CPID, each "
+                          "commissioned; d0: default form told RobotPlant's constants; "
                           "! = does not hold)")
 
 

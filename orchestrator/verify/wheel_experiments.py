@@ -20,7 +20,7 @@ from components.plant.parameters import PlantParameters
 __all__ = ["REQUIREMENTS", "FMU_REQUIREMENTS", "plant_variant_parameters", "step_reference",
            "ramp_reference", "trapezoid", "trapezoid_end", "settling_after",
            "largest_ramp_lag", "creep", "peak_to_peak", "slide_entries", "speed_quantum",
-           "judged_cells", "grid_cells"]
+           "judged_cells", "judged_words", "grid_cells"]
 
 # Table names in the requirements file, in the report's order.
 REQUIREMENTS = ("off_nominal_settling", "load_step_recovery", "ramp_lag", "no_creep",
@@ -178,10 +178,21 @@ def grid_cells(grid):
 
 
 def judged_cells(grid):
-    """The cells the verdicts are given on: gain, time constant and their ratio all within
-    ``x1/span .. x span`` (``judged_factor_span`` of the grid table)."""
+    """The cells the verdicts are given on: every cell of the grid, or, with
+    ``judged_factor_span`` in the grid table, those whose gain, time constant and their ratio
+    all lie within ``x1/span .. x span``."""
+    if "judged_factor_span" not in grid:
+        return grid_cells(grid)
     span = float(grid["judged_factor_span"])
 
     def inside(x):
         return 1.0 / span - 1e-9 <= x <= span + 1e-9
     return [(g, t) for g, t in grid_cells(grid) if inside(g) and inside(t) and inside(g / t)]
+
+
+def judged_words(grid):
+    """Which wheels are judged, in words (for reports)."""
+    if "judged_factor_span" not in grid:
+        return "every wheel of the grid"
+    span = float(grid["judged_factor_span"])
+    return f"the wheels whose gain, time constant and gain/tau lie within x{1 / span:g}..x{span:g}"

@@ -61,20 +61,23 @@ def test_verify_writes_the_reports_with_checks_and_verdicts(report):
     assert "![" in markdown and "](stability_region.png)" in markdown
     assert str(out) not in markdown
     # The largest stable plant-gain factor, and every warning, stated in the text.
-    assert ("FGS-PD corners (weakest corner): stable up to x3.4 plant gain at tau x0.5 "
+    assert ("FGS-PD corners (weakest corner): stable up to x3.67 plant gain at tau x0.5 "
             "(kp 4.8, kd 0.24)") in markdown
     # the off-nominal requirements: which design meets what, first, and each requirement
     summary = markdown.split("## Contents")[0]
-    assert ("FGS-PD, default form: meets settling, load recovery, ramp lag, creep, limit cycle; "
-            "fails slip chatter.") in summary
+    assert ("FGS-PD, default form: meets settling, load recovery, ramp lag, creep, limit cycle, "
+            "slip chatter (all six).") in summary
     assert "FGS-PD, paper form: meets none" in summary
     assert "## Off-nominal requirements" in markdown
     for name in ("off_nominal_settling", "load_step_recovery", "ramp_lag", "no_creep",
                  "no_limit_cycle", "no_slip_chatter"):
-        for design in ("default", "paper", "pid"):
+        for design in ("default", "paper", "pid", "default_uncommissioned"):
             assert f"{name}_{design}" in names
     assert verdicts["off_nominal_settling_default"] and verdicts["no_creep_default"]
-    assert not verdicts["no_slip_chatter_default"]
+    assert verdicts["no_slip_chatter_default"]
+    # the same design told RobotPlant's constants on every wheel: what commissioning buys
+    assert not verdicts["off_nominal_settling_default_uncommissioned"]
+    assert not verdicts["no_slip_chatter_default_uncommissioned"]
     # the answer first: the summary (counts, then each finding), the contents, the checks
     assert markdown.index("## Summary") < markdown.index("## Contents") < markdown.index(
         "## Checks")

@@ -254,8 +254,9 @@ def test_overshoot_finding_reports_the_case1_numbers_and_flips_for_a_worse_pid()
     assert check.values["fgs_pd_paper_pct"] == pytest.approx([2.61, 4.44], abs=0.01)
     assert check.values["pid_pct"] == pytest.approx([2.19, 3.30], abs=0.01)
     assert check.values["fgs_pd_pure_pct"] == pytest.approx([1.63, 3.35], abs=0.01)
-    # the default form (reference model, no ramp integral) overshoots less than the CPID
-    assert check.values["fgs_pd_pct"] == pytest.approx([1.23, 2.27], abs=0.01)
+    # the default form (reference model, speed observer, no ramp integral) overshoots less
+    # than the CPID
+    assert check.values["fgs_pd_pct"] == pytest.approx([0.32, 1.03], abs=0.01)
     # A CPID with ten times the integral gain overshoots more: the claim then holds.
     worse = measure.paper_case1(dict(DEFAULTS, pid_ki=5.0))
     check = C.check_fgs_pd_overshoot_vs_pid(worse, 1.18, req)
@@ -293,16 +294,15 @@ def test_cli_exit_status_is_the_number_of_failed_checks(tmp_path, capsys):
     data = json.loads((tmp_path / "verification.json").read_text())
     failed = [c["name"] for c in data["checks"] if c["verdict"] == "FAIL"]
     warnings = {c["name"] for c in data["checks"] if c["verdict"] == "warning"}
-    # the default form slides at friction 0.05 (docs/control.md): the one failed requirement
-    assert status == len(failed) == data["summary"]["exit_status"] == 1
-    assert failed == ["no_slip_chatter_default"]
+    # every requirement holds (the findings about the paper are warnings)
+    assert status == len(failed) == data["summary"]["exit_status"] == 0
     assert {"robust_stability_x4_fgs_pd", "robust_stability_x4_pd", "routh_gives_paper_bounds",
             "fgs_pd_overshoot_vs_pid", "load_step_recovery_paper",
             "load_step_recovery_pid"} <= warnings
     out = capsys.readouterr().out
     assert "warning robust_stability_x4_fgs_pd" in out
     assert "FGS-PD, default form: meets settling, load recovery, ramp lag, creep, limit " \
-           "cycle; fails slip chatter." in out
+           "cycle, slip chatter (all six)." in out
     strict = main(arguments + ["--strict"])
     assert strict == len(failed) + len(warnings)
     # A requirement that fails counts once, and --strict adds the warnings.
@@ -310,8 +310,8 @@ def test_cli_exit_status_is_the_number_of_failed_checks(tmp_path, capsys):
     broken["robust_stability"]["gain_factors"] = [0.25, 0.5, 1.0, 2.0, 4.0]
     report = verify(tmp_path / "broken", grid_size=2, fmu=False, plots=False,
                     requirements=broken)
-    assert report.exit_status() == 3  # robust_stability_fgs_pd and _pd, slip chatter
-    assert report.exit_status(strict=True) == 3 + len(warnings)
+    assert report.exit_status() == 2  # robust_stability_fgs_pd and _pd
+    assert report.exit_status(strict=True) == 2 + len(warnings)
     assert json.loads((tmp_path / "verification.json").read_text())["summary"]["strict"]
 
 

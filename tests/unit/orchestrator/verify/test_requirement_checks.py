@@ -53,19 +53,23 @@ def test_ranges_in_words_when_the_nominal_wheel_fails_or_holds():
 
 
 def test_verdict_is_on_the_judged_cells_and_the_fmus():
-    judged = judged_cells(GRID)
+    # the rule that judges only part of the grid (the shipped file judges all of it)
+    grid = dict(GRID, judged_factor_span=2.0)
+    judged = judged_cells(grid)
+    assert len(judged) == 7 and len(judged_cells(GRID)) == 20
     everywhere = _rows(lambda g, t: True)
     on_judged_only = _rows(lambda g, t: (g, t) in judged)
     table = REQ["off_nominal_settling"]
-    assert check_requirement("off_nominal_settling", "default", on_judged_only, None, GRID, table,
+    assert check_requirement("off_nominal_settling", "default", on_judged_only, None, grid, table,
                              judged).passed
     one_out = _rows(lambda g, t: (g, t) != (2.0, 2.0))
-    check = check_requirement("off_nominal_settling", "default", one_out, None, GRID, table, judged)
+    check = check_requirement("off_nominal_settling", "default", one_out, None, grid, table, judged)
     assert not check.passed and check.verdict == "FAIL"
     assert "1 of 7 judged wheels fail" in check.measured
+    assert "gain, time constant and gain/tau lie within x0.5..x2" in check.requirement
     fmu_fails = [dict(r, passed=r["gain_factor"] != 0.5) for r in everywhere if
                  (r["gain_factor"], r["time_constant_factor"]) in judged]
-    check = check_requirement("off_nominal_settling", "paper", everywhere, fmu_fails, GRID,
+    check = check_requirement("off_nominal_settling", "paper", everywhere, fmu_fails, grid,
                               table, judged)
     assert not check.passed and check.verdict == "warning"   # the paper's design: a finding
 

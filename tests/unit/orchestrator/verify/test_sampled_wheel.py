@@ -20,7 +20,9 @@ T = 0.02
                          ids=["nominal", "weak-slow", "strong-fast"])
 def test_loop_equals_the_closed_loop_transfer_function(design, cell):
     # frozen gains, no clipping: the simulation is the TF at the samples (one sample at zero
-    # reference first, as the TF assumes a derivative of zero before the step)
+    # reference first, as the TF assumes a derivative of zero before the step), to round-off
+    # (with the speed observer the loop is of ninth order, its triple pole ill-conditioned:
+    # 1.3e-11 measured)
     settings = dict(design_settings(dict(DEFAULTS), design), mode="pd", v_supply=1e9)
     model = loop_model(replace(WheelLoopModel(), gain_factor=cell[0],
                                time_constant_factor=cell[1]), settings)
@@ -29,16 +31,24 @@ def test_loop_equals_the_closed_loop_transfer_function(design, cell):
                      lambda t: 0.05 if t > 0.01 else 0.0, 2.0)
     tf = model.closed_loop_tf(*loop_gains(settings, settings["pd_kp"], settings["pd_kd"]))
     expected = 0.05 * control.step_response(tf, trace.t[:-1]).outputs
-    assert np.max(np.abs(trace.rim_speed[1:] - expected)) < 1e-11
+    assert np.max(np.abs(trace.rim_speed[1:] - expected)) < 1e-10
 
 
-def test_a_wrong_gain_mapping_misses_the_transfer_function():
-    # the broken input for the test above: the default form read as the paper's law
+@pytest.mark.parametrize("broken", ["paper-mapping", "no-observer"])
+def test_a_wrong_model_of_the_law_misses_the_transfer_function(broken):
+    # the broken inputs for the test above: the default form read as the paper's law, or
+    # its loop model without the speed observer (on a wheel unlike the nominal one: on that
+    # one the feedback sees no error and any gains give the same response)
     settings = dict(DEFAULTS, mode="pd", v_supply=1e9)
-    model = loop_model(WheelLoopModel(), settings)
+    model = loop_model(replace(WheelLoopModel(), gain_factor=0.5, time_constant_factor=2.0),
+                       settings)
     trace = run_loop(WheelSpeedController(**settings), SampledWheel(model.linear, T, v_supply=1e9),
                      lambda t: 0.05 if t > 0.01 else 0.0, 2.0)
-    tf = model.closed_loop_tf(settings["pd_kp"], settings["pd_kd"], settings["integral_gain"])
+    if broken == "paper-mapping":
+        tf = model.closed_loop_tf(settings["pd_kp"], settings["pd_kd"], settings["integral_gain"])
+    else:
+        tf = replace(model, speed_observer=0.0).closed_loop_tf(
+            *loop_gains(settings, settings["pd_kp"], settings["pd_kd"]))
     expected = 0.05 * control.step_response(tf, trace.t[:-1]).outputs
     assert np.max(np.abs(trace.rim_speed[1:] - expected)) > 1e-4
 
