@@ -24,8 +24,9 @@ the 1-16 kHz burst); scattering (specular walls only).
 
 Cost: the image lattice is built once from the parameters; each fix computes the distance of
 every image of the latest source position to the three microphones (whole arrays, one
-coordinate at a time), picks the burst whose record each can reach, computes those arrivals
-exactly and renders them (:mod:`.rendering`).
+coordinate at a time), picks the burst whose record each can reach, gathers the (microphone,
+image) pairs that have one (about half in a reverberant room), computes those arrivals exactly
+and renders them (:mod:`.rendering`).
 """
 
 import math
@@ -45,9 +46,15 @@ _SPAN = REFERENCE_AMPLITUDE * REFERENCE_DISTANCE
 def _distance(dx, dy, dz):
     """``sqrt(dx^2 + dy^2 + dz^2)`` into a new array."""
     total = np.square(dx)
-    total += np.square(dy)
-    total += np.square(dz)
+    square = np.square(dy)
+    total += square
+    total += np.square(dz, out=square)
     return np.sqrt(total, out=total)
+
+
+def _largest_norm(rows):
+    """``max(np.linalg.norm(rows, axis=1))`` (the same sums) for a few rows."""
+    return math.sqrt(float(np.max(np.add.reduce(rows * rows, axis=1))))
 
 
 class Arrivals:
@@ -96,7 +103,7 @@ class RoomAcoustics:
     """
 
     # Built from parameters at construction and never changed: not part of the FMU state.
-    STATE_CONSTANTS = ("room", "lattice", "renderer", "_bounds")
+    STATE_CONSTANTS = ("room", "lattice", "renderer", "_bounds", "_amplitude")
 
     def __init__(self, settings):
         s = settings
@@ -126,6 +133,8 @@ class RoomAcoustics:
         self.lattice = ImageLattice(self.room, self.speed_of_sound * (self.cut + record_span),
                                     None if s.image_order < 0 else s.image_order)
         self.renderer = ArrivalRenderer(s.burst, s.sample_rate)
+        # Each image's amplitude at unit distance.
+        self._amplitude = _SPAN * self.lattice.attenuation
         self._bounds = (self.room.origin.tolist(), self.room.size.tolist())
 
     @property
@@ -255,8 +264,8 @@ class RoomAcoustics:
             ``(first, last)`` [s] after the latest emission: arrivals starting in it.
         detail : bool, optional
             Only the arrivals in the window, with each one's burst, order, lattice row and
-            path; otherwise every candidate pair, those outside at zero gain (cheaper to
-            render than to select).
+            path; otherwise the candidate pairs, those that turn out outside the window or
+            unsounded at zero gain (cheaper to render than to select once more).
 
         Returns
         -------
@@ -268,8 +277,8 @@ class RoomAcoustics:
         # Candidates from the latest burst's images at the microphones as they are at
         # `reference`, widened by how far the source and the microphones move meanwhile.
         shift = sources - sources[0]
-        moved = float(np.max(np.linalg.norm(shift[sounded], axis=1)))
-        speed = float(np.max(np.linalg.norm(velocity, axis=1)))
+        moved = _largest_norm(shift[sounded])
+        speed = _largest_norm(velocity)
         spread = (moved + speed * (last - first + abs(reference - first)) + 1e-4) / c
         # (3 microphones, N images) arrays, one coordinate at a time: numpy reduces a length-3
         # axis slowly, and most images have a candidate burst in every fix.
@@ -279,87 +288,95 @@ class RoomAcoustics:
         to_image = [images[k][None, :] - mics[:, k, None] for k in range(3)]
         travel = _distance(*to_image)
         travel /= c
-        reachable = (travel <= self.cut + spread) | (lattice.order[:count] == 0)
-        # Burst b reaches the window when travel - b T lies in it (+- spread).
-        last_burst = len(sounded) - 1
+        reachable = travel <= self.cut + spread
+        reachable |= lattice.order[:count] == 0
+        # Burst b reaches the window when travel - b T lies in it (+- spread); none after the
+        # last that sounded. The exact test is on each arrival's own delay (_exact), so these
+        # bounds need only hold to within the spread.
+        last_burst = int(np.flatnonzero(sounded)[-1])
         if self.burst_period > 0.0:
-            lowest = np.ceil((travel - last - spread) / self.burst_period)
+            periods = travel / self.burst_period
+            lowest = np.ceil(periods - (last + spread) / self.burst_period)
             np.maximum(lowest, 0.0, out=lowest)
-            highest = np.floor((travel - first + spread) / self.burst_period)
+            highest = np.floor(periods - (first - spread) / self.burst_period, out=periods)
             np.minimum(highest, float(last_burst), out=highest)
         else:
             lowest = np.zeros_like(travel)
             highest = ((travel >= first - spread) & (travel <= last + spread)) - 1.0
-        moving = (moved > 0.0, speed > 0.0)
+        # A second burst reaches the window only where it is longer than T (a few pairs).
+        if last - first + 2.0 * spread < 0.999 * self.burst_period:
+            extras = 0
+        else:
+            extras = max(int(np.max(highest - lowest)), 0)
         parts = []
-        for extra in range(max(int(np.max(highest - lowest)), 0) + 1):
-            burst = lowest + extra
+        for extra in range(extras + 1):
+            burst = lowest + extra if extra else lowest
             candidate = burst <= highest
             candidate &= reachable
-            burst = np.minimum(burst, float(last_burst)).astype(np.int64)
-            candidate &= sounded[burst]
-            # A second burst reaches the window only where it is longer than T (a few pairs).
-            pair = None if extra == 0 else np.flatnonzero(candidate)
-            parts.append(self._exact(to_image, travel, shift, burst, candidate, velocity,
-                                     reference, window, pair, moving, detail))
-        if detail:
-            return Arrivals(*(np.concatenate(column)
-                              for column in zip(*(vars(part).values() for part in parts))))
-        return Arrivals(*(np.concatenate([np.broadcast_to(a, part.gain.shape).ravel()
-                                          for a, part in zip(column, parts)])
-                          for column in zip(*((p.microphone, p.delay, p.gain) for p in parts))))
+            parts.append(self._exact(to_image, travel, shift, burst, np.flatnonzero(candidate),
+                                     sounded, velocity, reference, window, (moved, speed),
+                                     detail))
+        if len(parts) == 1:
+            return parts[0]
+        return Arrivals(*(None if column[0] is None else np.concatenate(column)
+                          for column in zip(*(vars(part).values() for part in parts))))
 
-    def _exact(self, to_image, travel, shift, burst, candidate, velocity, reference, window,
-               pair, moving, detail):
+    def _exact(self, to_image, travel, shift, burst, pair, sounded, velocity, reference,
+               window, motion, detail):
         """The arrivals of (microphone, image) pairs for their burst.
 
-        Whole (3, N) arrays, the pairs that are not ``candidate`` at zero gain, or (with
-        ``pair``) the flat indices of a few of them. ``to_image`` and ``travel`` are the latest
-        burst's images seen from the microphones at ``reference``; an earlier burst's image
-        is displaced by its source's ``shift`` (mirrored), then each microphone moves on to
-        the arrival. The arrival instant that sets where the microphone is comes from
-        ``travel`` (exact for the latest burst; for earlier ones off by the source's
-        displacement, under 0.2 ms: 0.1 mm of array motion, a phase of the diffuse tail).
+        ``to_image``, ``travel`` and ``burst`` are (3, N) arrays over the microphones and the
+        images; ``pair`` the ascending flat indices of the pairs to compute. ``to_image`` and
+        ``travel`` are the latest burst's images seen from the microphones at ``reference``;
+        an earlier burst's image is displaced by its source's ``shift`` (mirrored), then each
+        microphone moves on to the arrival. The arrival instant that sets where the microphone
+        is comes from ``travel`` (exact for the latest burst; for earlier ones off by the
+        source's displacement, under 0.2 ms: 0.1 mm of array motion, a phase of the diffuse
+        tail).
         """
         c = self.speed_of_sound
         lattice = self.lattice
         count = travel.shape[-1]
-        source_moved, microphones_moved = moving
-        if pair is None:
-            microphone, image = np.arange(3)[:, None], slice(0, count)
-            to_image = list(to_image)
-        else:
-            microphone, image = pair // count, pair % count
-            burst = burst.ravel()[pair]
-            candidate = np.ones(pair.size, dtype=bool)
-            to_image = [d.ravel()[pair] for d in to_image]
-            travel = travel.ravel()[pair]
+        # Ascending pairs: each microphone's are one run.
+        runs = np.diff(np.searchsorted(pair, (0, count, 2 * count, 3 * count)))
+        microphone = np.repeat(np.arange(3), runs)
+        image = pair - np.repeat((0, count, 2 * count), runs)
+        to_image = [d.ravel().take(pair) for d in to_image]
+        travel = travel.ravel().take(pair)
+        burst = burst.ravel().take(pair)
         offset = burst * -self.burst_period
-        if source_moved:
+        moved, speed = motion
+        if moved > 0.0 or not sounded.all():
+            burst = burst.astype(np.int64)
+        if moved > 0.0:
             for axis in range(3):
-                to_image[axis] = to_image[axis] + lattice.signs[axis][image] \
-                    * np.ascontiguousarray(shift[:, axis])[burst]
-        if microphones_moved:
+                # A coordinate no body moves along keeps its values (adding zeros).
+                if shift[:, axis].any():
+                    to_image[axis] += (lattice.signs[axis].take(image)
+                                       * np.ascontiguousarray(shift[:, axis]).take(burst))
+        if speed > 0.0:
             lag = travel + offset
             lag -= reference
             for axis in range(3):
-                to_image[axis] = to_image[axis] - velocity[:, axis][microphone] * lag
-        if source_moved or microphones_moved:
+                if velocity[:, axis].any():
+                    to_image[axis] -= np.repeat(velocity[:, axis], runs) * lag
+        if moved > 0.0 or speed > 0.0:
             path = _distance(*to_image)
         else:
             path = travel * c
         delay = path / c
         delay += offset
-        keep = (delay > window[0]) & (delay < window[1])
-        keep &= candidate
-        gain = (_SPAN * lattice.attenuation[image]) / path
+        keep = delay > window[0]
+        keep &= delay < window[1]
+        if not sounded.all():
+            keep &= sounded.take(burst)
+        gain = self._amplitude.take(image)
+        gain /= path
         if not detail:
             gain *= keep
             return Arrivals(microphone, delay, gain)
-        shape = keep.shape
-        return Arrivals(np.broadcast_to(microphone, shape)[keep], delay[keep], gain[keep],
-                        burst[keep], np.broadcast_to(lattice.order[image], shape)[keep],
-                        np.broadcast_to(np.arange(count)[image], shape)[keep], path[keep])
+        return Arrivals(microphone[keep], delay[keep], gain[keep], burst[keep].astype(np.int64),
+                        lattice.order.take(image[keep]), image[keep], path[keep])
 
     # ----- static geometry (validation, benchmarks) ------------------------------------------
     def static_records(self, source, mics, earlier=True):

@@ -10,10 +10,17 @@ from components.acoustics import LocalizerSettings, locate_records, make_estimat
 from components.acoustics.motion import PoseHistory
 from components.acoustics.rendering import PHASES
 from components.acoustics.reverberation import RoomAcoustics
-from components.acoustics.synthesis import _delayed_bursts
+from components.acoustics.synthesis import (REFERENCE_AMPLITUDE, REFERENCE_DISTANCE,
+                                            _delayed_bursts)
 
 C = 340.0
 FS = 100_000
+
+
+# Microphones off the nominal array and channels sampling apart (test_imperfections.py).
+IMPERFECT_ARRAY = dict(mic_left_along=4e-3, mic_left_across=-2e-3, mic_centre_across=5e-3,
+                       mic_right_along=-3e-3, mic_right_across=7e-3, adc_skew_left=-9e-6,
+                       adc_skew_right=5e-6)
 
 
 def renderer_bound(settings, gain_sum):
@@ -120,6 +127,73 @@ def test_moving_array_hears_each_microphone_when_the_sound_reaches_it():
     still = _delayed_bursts(settings.burst, gains, frozen, np.asarray(start), FS,
                             settings.record_samples)
     assert np.abs(records - still).max() > 20.0 * renderer_bound(settings, gains.max())
+
+
+def arrivals_burst_by_burst(acoustics, sources, sounded, mics, velocity, reference, window):
+    """Every image of every sounded burst at every microphone, one burst at a time (the slow
+    reference): ``(microphone, image, burst)`` rows in that order, their delays and gains.
+
+    By the module's definitions: burst b's image of the source where it was at b's emission,
+    each microphone where it is at the arrival (the instant from the latest burst's travel),
+    images reached within the cut (widened by the candidates' spread) or the direct sound.
+    """
+    c, lattice = acoustics.speed_of_sound, acoustics.lattice
+    first, last = window
+    moved = max(np.linalg.norm(s - sources[0]) for s, on in zip(sources, sounded) if on)
+    speed = max(np.linalg.norm(v) for v in velocity)
+    spread = (moved + speed * (last - first + abs(reference - first)) + 1e-4) / c
+    images = [lattice.signs * source[:, None] + lattice.shifts for source in sources]
+    keys, delays, gains = [], [], []
+    for mic in range(3):
+        travel = np.linalg.norm(images[0] - mics[mic][:, None], axis=0) / c
+        reached = (travel <= acoustics.cut + spread) | (lattice.order == 0)
+        for burst in np.flatnonzero(sounded):
+            offset = -burst * acoustics.burst_period
+            there = mics[mic][:, None] + velocity[mic][:, None] * (travel + offset - reference)
+            path = np.linalg.norm(images[burst] - there, axis=0)
+            delay = path / c + offset
+            row = np.flatnonzero(reached & (delay > first) & (delay < last))
+            keys.append(np.column_stack([np.full(row.size, mic), row, np.full(row.size, burst)]))
+            delays.append(delay[row])
+            gains.append(REFERENCE_AMPLITUDE * REFERENCE_DISTANCE * lattice.attenuation[row]
+                         / path[row])
+    keys, delays, gains = (np.concatenate(column) for column in (keys, delays, gains))
+    order = np.lexsort(keys.T[::-1])
+    return keys[order], delays[order], gains[order]
+
+
+@pytest.mark.parametrize("moving", [True, False], ids=["moving", "at_rest"])
+@pytest.mark.parametrize("extra", [{}, IMPERFECT_ARRAY], ids=["nominal", "imperfect"])
+def test_arrivals_and_records_equal_the_burst_by_burst_reference(moving, extra):
+    # RT60 0.4 s to the 30 dB cut, a burst every 10 ms (21 of them), four of them silent.
+    settings = LocalizerSettings(room=True, rt60=0.4, reverb_cut_db=30.0, **extra)
+    acoustics = RoomAcoustics(settings)
+    count = acoustics.earlier_bursts + 1
+    mics = acoustics.microphones(0.4, 2.1, 1.1)
+    source = np.array([2.9, 4.6, settings.source_height])
+    step = np.array([0.002, -0.001, 0.0]) if moving else np.zeros(3)
+    sources = source + np.arange(count)[:, None] * step
+    velocity = np.array([[0.3, -0.2, 0.0], [0.31, -0.18, 0.0], [0.29, -0.22, 0.0]])
+    velocity *= moving
+    sounded = np.ones(count, dtype=bool)
+    sounded[[3, 4, 11, 17]] = False
+    reference = float(np.linalg.norm(mics[1] - source)) / C
+    records, ranges = acoustics.render(sources, sounded, mics, velocity, reference)
+    start = (math.floor((min(ranges) / C - settings.pre_roll) * FS) / FS)
+    window = (start - settings.burst_duration, start + settings.record_samples / FS)
+    keys, delay, gain = arrivals_burst_by_burst(acoustics, sources, sounded, mics, velocity,
+                                                reference, window)
+    assert len(keys) > 10_000
+    ours = acoustics.arrivals(sources, sounded, mics, velocity, reference, window, detail=True)
+    order = np.lexsort((ours.burst, ours.image, ours.microphone))
+    np.testing.assert_array_equal(np.column_stack([ours.microphone, ours.image, ours.burst])[order],
+                                  keys)
+    np.testing.assert_allclose(ours.delay[order], delay, rtol=0.0, atol=1e-15)   # 1 fs
+    np.testing.assert_allclose(ours.gain[order], gain, rtol=1e-13)
+    skews = np.zeros(3) if acoustics.adc_skews is None else acoustics.adc_skews
+    expected = acoustics.renderer.render(keys[:, 0], delay - skews[keys[:, 0]], gain, start,
+                                         settings.record_samples)
+    assert np.abs(records - expected).max() <= 1e-12 * np.abs(expected).max()
 
 
 @pytest.fixture
