@@ -62,6 +62,12 @@ class PoseHistory:
                          np.interp(times, table[:, TIME], table[:, SOURCE_Y])], axis=-1)
 
     @staticmethod
+    def source_point(table, time):
+        """The source position ``(x, y)`` at one instant as :meth:`source_at` gives it (floats)."""
+        return (float(np.interp(time, table[:, TIME], table[:, SOURCE_X])),
+                float(np.interp(time, table[:, TIME], table[:, SOURCE_Y])))
+
+    @staticmethod
     def emitting_at(table, times):
         """Whether the source sounded at ``times``: the latest sample at or before each (False before the first)."""
         index = np.searchsorted(table[:, TIME], times, side="right") - 1

@@ -200,11 +200,14 @@ class RoomAcoustics:
         mics = self.microphones(*pose_now)
         velocity = ((mics - self.microphones(*pose_prev)) / (t_now - t_prev)
                     if t_now > t_prev else np.zeros((3, 3)))
-        # Emission of the latest burst: its direct sound reaches M2 at `time`.
+        # Emission of the latest burst: its direct sound reaches M2 at `time` (one instant at
+        # a time in floats: numpy's array set-up would cost more than the arithmetic).
+        (origin_x, origin_y, _), _ = self._bounds
         emission = time
         for _ in range(3):
-            source = self._sources(table, [emission])[0]
-            emission = time - float(np.linalg.norm(mics[1] - source)) / self.speed_of_sound
+            x, y = PoseHistory.source_point(table, emission)
+            to_m2 = mics[1] - (x - origin_x, y - origin_y, self.source_height)
+            emission = time - math.sqrt(to_m2.dot(to_m2)) / self.speed_of_sound
         emitted_at = emission - np.arange(self.earlier_bursts + 1) * self.burst_period
         sounded = PoseHistory.emitting_at(table, emitted_at)
         sounded[0] = True
@@ -212,8 +215,11 @@ class RoomAcoustics:
                            time - emission)
 
     def _sources(self, table, times):
-        xy = PoseHistory.source_at(table, np.asarray(times, dtype=float)) - self.room.origin[:2]
-        return np.column_stack([xy, np.full(len(xy), self.source_height)])
+        sources = np.empty((len(times), 3))
+        sources[:, :2] = PoseHistory.source_at(table, times)
+        sources[:, :2] -= self.room.origin[:2]
+        sources[:, 2] = self.source_height
+        return sources
 
     def render(self, sources, sounded, mics, velocity, reference):
         """Clean records (3, n) of the latest burst's record and the direct ranges.
@@ -237,9 +243,11 @@ class RoomAcoustics:
         """Direct paths [m] of the latest burst to M1, M2, M3 (moving microphones, see above)."""
         ranges = []
         for mic, speed in zip(mics, velocity):
-            guess = float(np.linalg.norm(mic - source))
-            moved = mic + speed * (guess / self.speed_of_sound - reference)
-            ranges.append(float(np.linalg.norm(moved - source)))
+            # |x| as np.linalg.norm computes it for a vector, without its checks.
+            to_mic = mic - source
+            guess = math.sqrt(to_mic.dot(to_mic))
+            to_mic = mic + speed * (guess / self.speed_of_sound - reference) - source
+            ranges.append(math.sqrt(to_mic.dot(to_mic)))
         return ranges
 
     # ----- the arrivals of given emissions -----------------------------------------------------

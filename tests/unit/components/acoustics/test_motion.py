@@ -21,6 +21,11 @@ def test_positions_between_steps_are_linear_and_held_outside():
     expected_y = -0.5 * np.clip(times, 0.0, 0.19)
     np.testing.assert_allclose(PoseHistory.source_at(table, times),
                                np.c_[expected_x, expected_y], rtol=0, atol=1e-15)
+    # One instant at a time: the same values, to the bit (the room's emission instant is
+    # iterated on them).
+    for time, x, y, row in zip(times, expected_x, expected_y, PoseHistory.source_at(table, times)):
+        assert PoseHistory.source_point(table, time) == pytest.approx((x, y), rel=0, abs=1e-15)
+        assert PoseHistory.source_point(table, time) == tuple(row.tolist())
 
 
 def test_emitting_is_sample_and_hold_and_silent_before_the_first_sample():
