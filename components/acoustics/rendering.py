@@ -85,7 +85,8 @@ class ArrivalRenderer:
         index += whole
         index = index.astype(np.int64)
         rows = np.arange(0, 3 * (phases + 1) * columns, (phases + 1) * columns) + (lead + 1)
-        index += rows.take(np.broadcast_to(microphone, index.shape))
+        index += rows.take(microphone if np.shape(microphone) == index.shape
+                           else np.broadcast_to(microphone, index.shape))
         upper_gain = gain * weight
         cells = 3 * (phases + 1) * columns
         trains = np.bincount(index.ravel(), (gain - upper_gain).ravel(), minlength=cells)

@@ -54,7 +54,7 @@ def _distance(dx, dy, dz):
 
 def _largest_norm(rows):
     """``max(np.linalg.norm(rows, axis=1))`` (the same sums) for a few rows."""
-    return math.sqrt(float(np.max(np.add.reduce(rows * rows, axis=1))))
+    return math.sqrt(float(np.maximum.reduce(np.add.reduce(rows * rows, axis=1))))
 
 
 class Arrivals:
@@ -346,7 +346,8 @@ class RoomAcoustics:
         lattice = self.lattice
         count = travel.shape[-1]
         # Ascending pairs: each microphone's are one run.
-        runs = np.diff(np.searchsorted(pair, (0, count, 2 * count, 3 * count)))
+        ends = pair.searchsorted((0, count, 2 * count, 3 * count))
+        runs = ends[1:] - ends[:-1]
         microphone = np.repeat(np.arange(3), runs)
         image = pair - np.repeat((0, count, 2 * count), runs)
         to_image = [d.ravel().take(pair) for d in to_image]
@@ -354,20 +355,20 @@ class RoomAcoustics:
         burst = burst.ravel().take(pair)
         offset = burst * -self.burst_period
         moved, speed = motion
-        if moved > 0.0 or not sounded.all():
+        all_sounded = bool(sounded.all())
+        if moved > 0.0 or not all_sounded:
             burst = burst.astype(np.int64)
+        # A coordinate no body moves along keeps its values (adding zeros).
         if moved > 0.0:
-            for axis in range(3):
-                # A coordinate no body moves along keeps its values (adding zeros).
-                if shift[:, axis].any():
-                    to_image[axis] += (lattice.signs[axis].take(image)
-                                       * np.ascontiguousarray(shift[:, axis]).take(burst))
+            shift_by_axis = shift.T.copy()
+            for axis in np.flatnonzero(shift_by_axis.any(axis=1)):
+                to_image[axis] += lattice.signs[axis].take(image) * shift_by_axis[axis].take(burst)
         if speed > 0.0:
             lag = travel + offset
             lag -= reference
-            for axis in range(3):
-                if velocity[:, axis].any():
-                    to_image[axis] -= np.repeat(velocity[:, axis], runs) * lag
+            velocity_by_axis = velocity.T
+            for axis in np.flatnonzero(velocity_by_axis.any(axis=1)):
+                to_image[axis] -= np.repeat(velocity_by_axis[axis], runs) * lag
         if moved > 0.0 or speed > 0.0:
             path = _distance(*to_image)
         else:
@@ -376,7 +377,7 @@ class RoomAcoustics:
         delay += offset
         keep = delay > window[0]
         keep &= delay < window[1]
-        if not sounded.all():
+        if not all_sounded:
             keep &= sounded.take(burst)
         gain = self._amplitude.take(image)
         gain /= path

@@ -348,8 +348,9 @@ class ImageLattice:
     def within(self, distance, point, others):
         """How many rows (by reach) can hold an image of ``point`` within ``distance`` of a
         point in ``others`` (N, 3): the rest are farther."""
-        point = np.asarray(point, dtype=float)
-        farthest = float(np.max(np.linalg.norm(np.asarray(others, dtype=float) - self.centre,
-                                               axis=-1)))
-        bound = distance + float(np.linalg.norm(point - self.centre)) + farthest
-        return int(np.searchsorted(self.reach, bound, side="right"))
+        # The norms as np.linalg.norm computes them, without its checks (called every fix).
+        from_centre = np.asarray(others, dtype=float) - self.centre
+        farthest = math.sqrt(float(np.add.reduce(from_centre * from_centre, axis=-1).max()))
+        from_centre = np.asarray(point, dtype=float) - self.centre
+        bound = distance + math.sqrt(from_centre.dot(from_centre)) + farthest
+        return int(self.reach.searchsorted(bound, side="right"))
