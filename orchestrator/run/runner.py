@@ -35,6 +35,10 @@ class RunResult:
         The PNG files written (absolute).
     plots_error : str or None
         Why some plots could not be drawn (one line), if so.
+    data : dict or None
+        With ``keep_rows``: every column of ``results.csv`` (``{column: array}``, the very
+        values :func:`~orchestrator.run.results.read_results` reads back), if the run ended
+        ``ok`` and its rows were held in memory; else None (read the file).
     """
 
     summary: dict
@@ -43,11 +47,13 @@ class RunResult:
     summary_json: Path
     plots: list = field(default_factory=list)
     plots_error: str | None = None
+    data: dict | None = None
 
 
 def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
                  algorithm=None, record_interval=0.02, backend="fmi", fsync=False,
-                 system=None, handles=None, sync_summary=True, allow_outside=False):
+                 system=None, handles=None, sync_summary=True, allow_outside=False,
+                 keep_rows=False):
     """Run one scenario through our master on fmpy.
 
     The results folder is checked before anything runs; an older run's files in it are
@@ -99,6 +105,10 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
     allow_outside : bool
         Let the scenario and system files name files outside their own folders (waypoint
         CSVs, ``.ssv`` parameter files; see :mod:`orchestrator.files.paths`).
+    keep_rows : bool
+        Hold every recorded row in memory too (up to the summary's trace limit,
+        :data:`~orchestrator.run.summary.MAX_TRACE_ROWS`) and return them as
+        :attr:`RunResult.data`, for a caller that would otherwise read ``results.csv`` back.
 
     Returns
     -------
@@ -132,13 +142,13 @@ def run_scenario(scenario, out_dir, progress=True, fmu_dir=None, plots=True,
 
         renderer = PlotRenderer()   # imports matplotlib on another core while we step
     try:
-        return _run(plan, folder, progress, renderer)
+        return _run(plan, folder, progress, renderer, keep_rows)
     finally:
         if renderer is not None:
             renderer.close()
 
 
-def _run(plan: RunPlan, folder, progress, renderer):
+def _run(plan: RunPlan, folder, progress, renderer, keep_rows=False):
     """run_scenario once its plan is made and its folder is ready."""
     from orchestrator.fmu.handle import FmuInstance
     from orchestrator.run.master import InstanceSpec, Link, Master
@@ -197,7 +207,9 @@ def _run(plan: RunPlan, folder, progress, renderer):
             read_row = _ColumnReader(master, system, columns)
             bar = _progress(steps_total, scenario, progress)
             recorder = _open_recorder(folder.results_csv, columns, plan.fsync)
-            trace = RowTrace(columns, plan.expected_rows, getattr(scenario, "faults", ()))
+            # with keep_rows the summary's trace holds every column: one copy per row either way
+            trace = RowTrace(columns, plan.expected_rows, getattr(scenario, "faults", ()),
+                             every_column=keep_rows)
             row = read_row()
             recorder.record(start_time, row)
             trace.append(start_time, row)
@@ -275,9 +287,13 @@ def _run(plan: RunPlan, folder, progress, renderer):
             summary["plots_error"] = plots_error
         summary["plots"] = [path.name for path in written]
         folder.write_summary(summary)
+    data = None
+    if (keep_rows and error is None and trace is not None and trace.kept
+            and trace.rows == recorder.rows):
+        data = trace.column_copies()
     result = RunResult(summary, folder.path.resolve(), folder.results_csv.resolve(),
                        folder.summary_json.resolve(), [p.resolve() for p in written],
-                       plots_error)
+                       plots_error, data)
     if interrupted:
         raise RunInterrupted(f"{error}; results so far in {folder.results_csv} (summary "
                              f"status: interrupted)", stop.received)

@@ -63,19 +63,25 @@ class RowTrace:
         if that is more than :data:`MAX_TRACE_ROWS`.
     faults : sequence of (str, Fault)
         The scenario's faults (their targets' ``faults_active`` columns are kept too).
+    every_column : bool
+        Keep every recorded column, not only the summary's: the whole run, as
+        :func:`~orchestrator.run.results.read_results` would read it back (a superset of
+        columns is a row source like the file itself).
 
     Attributes
     ----------
     names : list of str
-        ``time`` and the columns of :func:`summary_columns` that are recorded.
+        ``time`` and the columns of :func:`summary_columns` that are recorded (every recorded
+        column with ``every_column``).
     rows : int
         Rows appended so far.
     kept : bool
         Whether every row appended so far is held.
     """
 
-    def __init__(self, columns, expected_rows, faults=()):
-        self.names = ["time"] + [c for c in summary_columns(faults)[1:] if c in columns]
+    def __init__(self, columns, expected_rows, faults=(), every_column=False):
+        self.names = ["time"] + (list(columns) if every_column else
+                                 [c for c in summary_columns(faults)[1:] if c in columns])
         self.rows = 0
         self.kept = 0 < expected_rows <= MAX_TRACE_ROWS
         self._capacity = expected_rows if self.kept else 0
@@ -99,6 +105,12 @@ class RowTrace:
     def columns(self):
         """``{column: array}`` of the rows kept (views, not copies)."""
         return {name: self._values[:self.rows, i] for i, name in enumerate(self.names)}
+
+    def column_copies(self):
+        """``{column: array}`` of the rows kept, each a contiguous array of its own (as
+        :func:`~orchestrator.run.results.read_results` returns them)."""
+        return {name: np.ascontiguousarray(self._values[:self.rows, i])
+                for i, name in enumerate(self.names)}
 
     def chunks(self, columns):
         """Yield the rows kept as one ``{column: array}`` chunk (views), none if empty."""

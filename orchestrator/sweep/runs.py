@@ -38,6 +38,10 @@ class SweepResult:
         Runs computed now, found finished in the store, and failed (now).
     engine : str
         ``"local"`` or ``"cluster"`` (``""`` if nothing had to run).
+    data : dict
+        With ``keep_rows``: run key to the run's recorded columns (``{column: array}``, as
+        ``orchestrator.run.read_results`` reads its ``results.csv``), for each run computed
+        now that ended ``ok`` with its rows in memory; the others are read from their folder.
     """
 
     rows: list = field(default_factory=list)
@@ -48,6 +52,7 @@ class SweepResult:
     reused: int = 0
     failed: int = 0
     engine: str = ""
+    data: dict = field(default_factory=dict)
 
 
 def _row(run, summary, out_dir):
@@ -95,7 +100,7 @@ class _Table:
 
 
 def _execute(plan, first, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
-             record_interval, label, allow_outside):
+             record_interval, label, allow_outside, keep_rows=False):
     """Plan (``plan(system)``), reuse finished runs, run the rest on the engine, write the
     table.
 
@@ -124,16 +129,16 @@ def _execute(plan, first, out_dir, settings, fmu_dir, engine, scheduler, workers
         if settings is None:
             settings = list(dict.fromkeys(k for run in planned for k in run.settings))
         return _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers,
-                            progress, record_interval, label, allow_outside)
+                            progress, record_interval, label, allow_outside, keep_rows)
     finally:
         if own and engine is not None:
             engine.close()
 
 
 def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers, progress,
-                 record_interval, label, allow_outside):
+                 record_interval, label, allow_outside, keep_rows=False):
     from orchestrator.sweep.store import finished_summary
-    from orchestrator.sweep.worker import RunTask, run_task
+    from orchestrator.sweep.worker import RunOutput, RunTask, run_task
 
     out_dir = Path(out_dir)
     result = SweepResult(out_dir=out_dir)
@@ -158,6 +163,10 @@ def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers
         bar = _bar(len(planned), result.reused, label) if progress else None
 
         def on_result(key, summary):
+            if isinstance(summary, RunOutput):
+                if summary.data is not None:
+                    result.data[key] = summary.data
+                summary = summary.summary
             row = _row(by_key[key], summary if isinstance(summary, dict) else
                        {"status": "failed", "error": f"worker returned {summary!r}"},
                        out_dir)
@@ -172,7 +181,7 @@ def _run_planned(planned, out_dir, settings, fmu_dir, engine, scheduler, workers
         tasks = [(run.key, RunTask(run.scenario, str(run.run_dir), run.key, fmu_dir,
                                    {k[4:]: v for k, v in run.digests.items()
                                     if k.startswith("fmu:")}, record_interval,
-                                   allow_outside))
+                                   allow_outside, keep_rows))
                  for run in pending]
         try:
             engine.run(run_task, tasks, on_result)
@@ -274,7 +283,8 @@ def sweep(base, grid, out_dir, seeds=None, fmu_dir=None, scheduler=None, workers
 
 
 def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, workers=None,
-             progress=True, engine=None, record_interval=0.02, allow_outside=False):
+             progress=True, engine=None, record_interval=0.02, allow_outside=False,
+             keep_rows=False):
     """Run a list of scenarios (e.g. Monte Carlo draws) as one resumable sweep.
 
     Parameters
@@ -287,6 +297,10 @@ def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, wo
         What names each run in the table, one dict per scenario (default: its name and seed).
     fmu_dir, scheduler, workers, progress, engine, record_interval, allow_outside
         As for :func:`sweep`.
+    keep_rows : bool
+        Send each run's recorded columns back with its summary (:attr:`SweepResult.data`),
+        for a caller that reads every run's results: the worker holds them already, so they
+        need not be parsed again from ``results.csv``.
 
     Returns
     -------
@@ -309,4 +323,5 @@ def run_many(scenarios, out_dir, settings=None, fmu_dir=None, scheduler=None, wo
                               systems={scenarios[0].system: system} if system else None)
 
     return _execute(plan, scenarios[0] if scenarios else None, out_dir, None, fmu_dir, engine,
-                    scheduler, workers, progress, record_interval, "runs", allow_outside)
+                    scheduler, workers, progress, record_interval, "runs", allow_outside,
+                    keep_rows)

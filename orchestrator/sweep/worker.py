@@ -13,7 +13,9 @@ is freed (never reused); a pythonfmu instance that reported ``fmi2Fatal`` is dro
 a call.
 
 :func:`run_task` never raises: its result is the run's summary, with ``status`` ``"failed"``
-and the reason in ``error`` when the run could not be done.
+and the reason in ``error`` when the run could not be done. A task with ``keep_rows`` gets a
+:class:`RunOutput` instead: the summary and the run's recorded columns, which the caller would
+otherwise read back from ``results.csv``.
 """
 
 import os
@@ -22,7 +24,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["RunTask", "WarmInstances", "prepare", "run_task", "warm_instances",
+__all__ = ["RunOutput", "RunTask", "WarmInstances", "prepare", "run_task", "warm_instances",
            "warm_up"]
 
 
@@ -46,6 +48,8 @@ class RunTask:
         Simulated seconds between recorded rows.
     allow_outside : bool
         Let the ``.ssd`` name files outside its folder.
+    keep_rows : bool
+        Return the run's recorded columns with its summary (a :class:`RunOutput`).
     """
 
     scenario: object
@@ -55,6 +59,25 @@ class RunTask:
     fmu_digests: dict = field(default_factory=dict)
     record_interval: float = 0.02
     allow_outside: bool = False
+    keep_rows: bool = False
+
+
+@dataclass
+class RunOutput:
+    """What a task with ``keep_rows`` returns.
+
+    Attributes
+    ----------
+    summary : dict
+        The run's summary, as :func:`run_task` returns it otherwise.
+    data : dict or None
+        ``{column: array}``: every column of the run's ``results.csv`` with the values
+        :func:`orchestrator.run.read_results` reads back, if the run ended ``ok`` and its rows
+        were held in memory (:attr:`orchestrator.run.RunResult.data`); else None.
+    """
+
+    summary: dict
+    data: dict | None = None
 
 
 class WarmInstances:
@@ -176,12 +199,19 @@ def run_task(task, warm=None):
 
     Returns
     -------
-    dict
-        The run's summary; ``status`` is ``"ok"``, or ``"failed"`` with ``error``.
+    dict or RunOutput
+        The run's summary; ``status`` is ``"ok"``, or ``"failed"`` with ``error``. With
+        ``task.keep_rows``, a :class:`RunOutput` of the summary and the recorded columns.
     """
+    summary, data = _summary_and_rows(task, warm if warm is not None else _WARM)
+    return RunOutput(summary, data) if task.keep_rows else summary
+
+
+def _summary_and_rows(task, warm):
     started = time.perf_counter()
     try:
-        return _run(task, warm if warm is not None else _WARM)
+        result = _run(task, warm)
+        return result.summary, result.data
     except KeyboardInterrupt:
         raise
     except BaseException as exc:  # a run's failure is its row's business, not the sweep's
@@ -194,8 +224,8 @@ def run_task(task, warm=None):
         if summary is not None and summary.get("status") != "ok":
             # the run got as far as its own summary: keep its figures, say why it stopped
             summary.setdefault("error", text)
-            return summary
-        return _failed(text, started)
+            return summary, None
+        return _failed(text, started), None
 
 
 def prepare(ssd_path, fmu_dir, allow_outside=False):
@@ -299,11 +329,11 @@ def _run(task, warm):
         result = run_scenario(scenario, run_dir, progress=False, fmu_dir=task.fmu_dir,
                               plots=False, record_interval=task.record_interval,
                               system=system, handles=handle, sync_summary=False,
-                              allow_outside=task.allow_outside)
+                              allow_outside=task.allow_outside, keep_rows=task.keep_rows)
     except BaseException:
         for *_, instance in taken:
             _release(instance)
         raise
     for name, path, digest, instance in taken:
         warm.give_back(name, path, digest, instance)
-    return result.summary
+    return result

@@ -257,6 +257,32 @@ def test_run_many_on_an_engine_kept_across_calls(fmu_dir, tmp_path):
     assert second.rows[:2] == first.rows
 
 
+def test_run_many_sends_back_the_columns_its_runs_wrote(fmu_dir, tmp_path):
+    import numpy as np
+
+    from orchestrator.run import read_results
+    from orchestrator.sweep import run_many
+
+    base = _short(0.5)
+    draws = [base.with_overrides(seed=seed) for seed in (1, 2)]
+    first = run_many(draws, tmp_path / "mc", fmu_dir=fmu_dir, workers=2, progress=False,
+                     keep_rows=True)
+    assert sorted(first.data) == sorted(row["hash"] for row in first.rows)
+    for row in first.rows:
+        on_disk = read_results(first.out_dir / row["run_dir"] / "results.csv")
+        sent = first.data[row["hash"]]
+        assert list(sent) == list(on_disk)
+        assert all(np.array_equal(sent[k], on_disk[k], equal_nan=True) for k in on_disk)
+    # runs found on disk are for the caller to read; without keep_rows nothing is sent
+    again = run_many(draws + [base.with_overrides(seed=3)], tmp_path / "mc", fmu_dir=fmu_dir,
+                     workers=1, progress=False, keep_rows=True)
+    assert (again.computed, again.reused) == (1, 2)
+    assert list(again.data) == [again.rows[2]["hash"]]
+    plain = run_many([base.with_overrides(seed=4)], tmp_path / "mc", fmu_dir=fmu_dir,
+                     workers=1, progress=False)
+    assert plain.computed == 1 and plain.data == {}
+
+
 def test_runs_alike_share_one_search_for_their_files(fmu_dir, tmp_path):
     from orchestrator.sweep.inputs import input_digests
     from orchestrator.system import load_system
