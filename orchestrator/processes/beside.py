@@ -7,6 +7,9 @@ child ends with this process however it dies (:func:`~.lifetime.die_with_parent`
 value through a pipe, and a child that raises or dies is reported, never taken for a result.
 Linux only (fork); elsewhere :class:`Beside` runs the function when :meth:`Beside.result` is
 called.
+
+:class:`BesideEach` spreads a list of such functions over a few forked children, each taking
+the next function not yet taken (the study's figures on every free core).
 """
 
 import multiprocessing
@@ -14,7 +17,7 @@ import os
 import sys
 import traceback
 
-__all__ = ["Beside"]
+__all__ = ["Beside", "BesideEach"]
 
 
 class Beside:
@@ -63,6 +66,55 @@ class Beside:
             raise RuntimeError(f"the child process ended without a result (exit code "
                                f"{self._process.exitcode})")
         raise RuntimeError(f"the child process raised:\n{value}")
+
+
+class BesideEach:
+    """Call each of ``functions`` in up to ``processes`` forked children (:class:`Beside`);
+    :meth:`result` waits for their values, in the order of ``functions``.
+
+    Each child calls the next function that no child has taken yet, until none is left, so a
+    long function does not hold up the others behind it.
+
+    Examples
+    --------
+    >>> squares = BesideEach([lambda i=i: i * i for i in range(5)], processes=2)
+    >>> squares.result()
+    [0, 1, 4, 9, 16]
+    """
+
+    def __init__(self, functions, processes):
+        functions = list(functions)
+        self._count = len(functions)
+        taken = multiprocessing.Value("l", 0)   # shared memory: the children take in turn
+
+        def take():
+            values = {}
+            while True:
+                with taken.get_lock():
+                    index = taken.value
+                    taken.value += 1
+                if index >= len(functions):
+                    return values
+                values[index] = functions[index]()
+        self._children = [Beside(take) for _ in range(max(1, min(processes, len(functions))))]
+
+    def result(self):
+        """The functions' values, in order.
+
+        Raises
+        ------
+        RuntimeError
+            Once every child has ended, if one raised or died (as :meth:`Beside.result`).
+        """
+        values, failure = {}, None
+        for child in self._children:
+            try:
+                values.update(child.result())
+            except RuntimeError as error:
+                failure = failure or error
+        if failure is not None:
+            raise failure
+        return [values[index] for index in range(self._count)]
 
 
 def _child(function, send, parent):

@@ -4,8 +4,11 @@ Each PNG (``figures/figNN_<what>.png``) shows the same quantities and axes as th
 figure, from every Monte Carlo run of the cells it needs: paths as thin lines per run, time
 series as a mean with its 95 % interval. Where two controllers or modes would lie on top of
 each other, a panel shows their paired difference instead. :func:`write_figures` returns a
-:class:`~orchestrator.reproduce.report.Figure` per file with the series it drew.
+:class:`~orchestrator.reproduce.report.Figure` per file with the series it drew;
+:func:`figure_jobs` gives the same figures as one function each, to draw them side by side.
 """
+
+from functools import partial
 
 import numpy as np
 
@@ -19,7 +22,7 @@ from .following import BODY_LENGTH, source_lane
 from .plotting import COLOURS, band, paths, save, traces
 from .report import Figure
 
-__all__ = ["write_figures", "write_room_figures"]
+__all__ = ["figure_jobs", "named", "room_figure_jobs", "write_figures", "write_room_figures"]
 
 _LABEL = {**CONTROLLERS, "curvature": "curvature",
           "rotate_then_go": "rotate then go (without curvature)"}
@@ -339,44 +342,62 @@ def _speed_trends(analysis, out, speeds):
                   [_LABEL["rotate_then_go"], _LABEL["curvature"]])
 
 
-def write_room_figures(study, out_dir):
-    """Figs. 25 and 29 from the room's runs (``fig25_straight_estimates_room.png``, ...)."""
+def room_figure_jobs(study, out_dir):
+    """Figs. 25 and 29 from the room's runs (``fig25_straight_estimates_room.png``, ...), one
+    function each (returning its Figure, or None); see :func:`named`."""
     out = out_dir / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for path, number, tag in (("straight", 25, "straight"), ("s_curve", 29, "scurve")):
-        figure = _estimates(study, out, path, number, f"fig{number}_{tag}_estimates_room.png",
-                            "xyt", where=" in the room")
-        if figure is not None:
-            figure.path = f"figures/{figure.path.name}"
-            written.append(figure)
-    return written
+    return [partial(_estimates, study, out, path, number, f"fig{number}_{tag}_estimates_room.png",
+                    "xyt", where=" in the room")
+            for path, number, tag in (("straight", 25, "straight"), ("s_curve", 29, "scurve"))]
+
+
+def write_room_figures(study, out_dir):
+    """Figs. 25 and 29 from the room's runs; returns the Figure records written."""
+    return named([job() for job in room_figure_jobs(study, out_dir)])
+
+
+def figure_jobs(study, analysis, out_dir, speeds):
+    """Every figure the study's cells allow, as functions of no argument, one a figure, in the
+    report's order: each draws its PNG and returns its Figure (None if its cells are missing).
+    They share nothing, so they may run in any order and process; see :func:`named`."""
+    out = out_dir / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    jobs = [partial(_speed_trends, analysis, out, speeds),
+            partial(_sec62_compare, study, out, "straight", 7),
+            partial(_sec62_compare, study, out, "s_curve", 8)]
+    for case, number in (("static", 13), ("dynamic", 15)):
+        jobs.append(partial(_tracking, study, out, case, number))
+        for mu in (NOMINAL_FRICTION, "mu0.05"):
+            tag = "" if mu == NOMINAL_FRICTION else f"_{mu.replace('.', '')}"
+            jobs.append(partial(
+                _wheel, study, out,
+                {c: study.of(t89_cell(case, c, "ff_on", mu)) for c in _PAPER_ARMS},
+                number + 1, f"left wheel, Case {1 if case == 'static' else 2} ({case}), "
+                f"{_condition_text('ff_on', mu)}", f"fig{number + 1}_{case}_left_wheel{tag}.png"))
+    jobs.append(partial(_comparison, analysis, out))
+    for path, base, tag in (("straight", 23, "straight"), ("s_curve", 27, "scurve")):
+        cells = {c: study.of(sec62_cell(path, _START, "curvature", c)) for c in ("cpid", "fgs_pd")}
+        jobs += [
+            partial(_sec62_tracking, study, out, path, base, f"fig{base}_{tag}_tracking.png"),
+            partial(_wheel, study, out, cells, base + 1, f"left wheel, {path} path, "
+                    f"{_START_TEXT}, curvature, feedforward on, mu 0.8",
+                    f"fig{base + 1}_{tag}_left_wheel.png"),
+            partial(_estimates, study, out, path, base + 2, f"fig{base + 2}_{tag}_estimates.png",
+                    "xyt"),
+            partial(_estimates, study, out, path, base + 3,
+                    f"fig{base + 3}_{tag}_distance_angle.png", "da")]
+    return jobs
 
 
 def write_figures(study, analysis, out_dir, speeds):
     """Write every figure the study's cells allow; returns the Figure records written."""
-    out = out_dir / "figures"
-    out.mkdir(parents=True, exist_ok=True)
-    figures = [_speed_trends(analysis, out, speeds),
-               _sec62_compare(study, out, "straight", 7), _sec62_compare(study, out, "s_curve", 8)]
-    for case, number in (("static", 13), ("dynamic", 15)):
-        figures.append(_tracking(study, out, case, number))
-        for mu in (NOMINAL_FRICTION, "mu0.05"):
-            tag = "" if mu == NOMINAL_FRICTION else f"_{mu.replace('.', '')}"
-            figures.append(_wheel(
-                study, out, {c: study.of(t89_cell(case, c, "ff_on", mu)) for c in _PAPER_ARMS},
-                number + 1, f"left wheel, Case {1 if case == 'static' else 2} ({case}), "
-                f"{_condition_text('ff_on', mu)}", f"fig{number + 1}_{case}_left_wheel{tag}.png"))
-    figures.append(_comparison(analysis, out))
-    for path, base, tag in (("straight", 23, "straight"), ("s_curve", 27, "scurve")):
-        cells = {c: study.of(sec62_cell(path, _START, "curvature", c)) for c in ("cpid", "fgs_pd")}
-        figures += [
-            _sec62_tracking(study, out, path, base, f"fig{base}_{tag}_tracking.png"),
-            _wheel(study, out, cells, base + 1, f"left wheel, {path} path, {_START_TEXT}, "
-                   "curvature, feedforward on, mu 0.8", f"fig{base + 1}_{tag}_left_wheel.png"),
-            _estimates(study, out, path, base + 2, f"fig{base + 2}_{tag}_estimates.png", "xyt"),
-            _estimates(study, out, path, base + 3, f"fig{base + 3}_{tag}_distance_angle.png",
-                       "da")]
+    return named([job() for job in figure_jobs(study, analysis, out_dir, speeds)])
+
+
+def named(figures):
+    """The figures drawn (the jobs' values without the Nones), each ``path`` made relative to
+    the report's folder (``figures/<name>.png``)."""
     written = [f for f in figures if f is not None]
     for figure in written:
         figure.path = f"figures/{figure.path.name}"

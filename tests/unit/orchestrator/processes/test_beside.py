@@ -11,7 +11,7 @@ import time
 import pytest
 
 from orchestrator.processes import beside
-from orchestrator.processes.beside import Beside
+from orchestrator.processes.beside import Beside, BesideEach
 
 
 def test_the_child_reads_the_parents_memory_and_returns_its_value():
@@ -62,6 +62,31 @@ def test_the_child_ends_when_the_parent_is_killed(tmp_path):
             pytest.fail("the child outlived its killed parent by 5 s")
     finally:
         parent.kill()
+
+
+def test_each_function_runs_once_in_a_child_and_the_values_come_back_in_order():
+    # the first function is slow: the other child takes every one after it meanwhile
+    def slow():
+        time.sleep(1.0)
+        return "slow", os.getpid()
+    quick = [lambda i=i: (i, os.getpid()) for i in range(1, 9)]
+    values = BesideEach([slow] + quick, processes=2).result()
+    assert [v for v, _ in values] == ["slow", *range(1, 9)]
+    pids = {pid for _, pid in values}
+    assert len(pids) == 2 and os.getpid() not in pids
+    assert all(pid != values[0][1] for _, pid in values[1:])
+
+
+def test_a_failing_function_is_raised_once_every_child_has_ended(tmp_path):
+    def fails():
+        raise ValueError("figure 17 has no cells")
+
+    def last():
+        time.sleep(0.3)
+        (tmp_path / "last").write_text("drawn")
+    with pytest.raises(RuntimeError, match="ValueError: figure 17 has no cells"):
+        BesideEach([fails, last], processes=2).result()
+    assert (tmp_path / "last").read_text() == "drawn"
 
 
 def _running(pid):
