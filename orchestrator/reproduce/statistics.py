@@ -18,6 +18,7 @@ median interval". Verdicts against the paper's magnitude are in
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy import stats
@@ -131,7 +132,7 @@ def mean_interval(samples, confidence=CONFIDENCE):
     if n == 1:
         return Estimate(mean, math.nan, math.nan, 1, math.nan, missing)
     std = float(values.std(ddof=1))
-    half = float(stats.t.ppf(0.5 + confidence / 2.0, n - 1)) * std / math.sqrt(n)
+    half = _t_quantile(0.5 + confidence / 2.0, n - 1) * std / math.sqrt(n)
     return Estimate(mean, mean - half, mean + half, n, std, missing)
 
 
@@ -223,10 +224,9 @@ def median_interval(samples, confidence=CONFIDENCE):
     std = float(finite.std(ddof=1)) if len(finite) > 1 else math.nan
     # the smallest k with P(B <= k) >= alpha / 2, so P(B <= k - 1) < alpha / 2: the largest
     # k whose interval covers at least 1 - alpha
-    k = int(stats.binom.ppf((1.0 - confidence) / 2.0, n, 0.5))
+    k, coverage = _median_rank(confidence, n)
     if k < 1:
         return Estimate(median, math.nan, math.nan, n, std, missing, "median", math.nan)
-    coverage = 1.0 - 2.0 * float(stats.binom.cdf(k - 1, n, 0.5))
     return Estimate(median, float(values[k - 1]), float(values[n - k]), n, std, missing,
                     "median", coverage)
 
@@ -269,8 +269,28 @@ def sign_test(differences, center=0.0):
     negative = int(np.count_nonzero(values < center))
     ties = len(values) - positive - negative
     total = positive + negative
-    p = float(stats.binomtest(positive, total, 0.5).pvalue) if total else 1.0
+    p = _sign_test_p(positive, total) if total else 1.0
     return SignTest(positive, negative, ties, p, float(center))
+
+
+# The study asks these of scipy thousands of times for a few dozen distinct counts (each call
+# about a millisecond): the values are kept, exactly as scipy gave them.
+@lru_cache(maxsize=None)
+def _t_quantile(q, dof):
+    return float(stats.t.ppf(q, dof))
+
+
+@lru_cache(maxsize=None)
+def _median_rank(confidence, n):
+    """The rank ``k`` of the median interval of ``n`` values and its exact coverage."""
+    k = int(stats.binom.ppf((1.0 - confidence) / 2.0, n, 0.5))
+    coverage = 1.0 - 2.0 * float(stats.binom.cdf(k - 1, n, 0.5)) if k >= 1 else math.nan
+    return k, coverage
+
+
+@lru_cache(maxsize=None)
+def _sign_test_p(positive, total):
+    return float(stats.binomtest(positive, total, 0.5).pvalue)
 
 
 @dataclass(frozen=True)
