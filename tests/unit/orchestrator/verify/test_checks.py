@@ -256,7 +256,7 @@ def test_overshoot_finding_reports_the_case1_numbers_and_flips_for_a_worse_pid()
     assert check.values["fgs_pd_pure_pct"] == pytest.approx([1.63, 3.35], abs=0.01)
     # the default form (reference model, speed observer, no ramp integral) overshoots less
     # than the CPID
-    assert check.values["fgs_pd_pct"] == pytest.approx([0.32, 1.03], abs=0.01)
+    assert check.values["fgs_pd_pct"] == pytest.approx([0.31, 1.05], abs=0.01)
     # A CPID with ten times the integral gain overshoots more: the claim then holds.
     worse = measure.paper_case1(dict(DEFAULTS, pid_ki=5.0))
     check = C.check_fgs_pd_overshoot_vs_pid(worse, 1.18, req)
