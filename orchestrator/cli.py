@@ -97,6 +97,7 @@ def _cmd_run(args):
     scenario, loaded, stop_time = _scenario(args)
     loaded = apply_overrides(loaded, stop_time, args.set or ())
     out = Path(args.out) if args.out else Path("runs") / loaded.name
+    _warn_stale_fmus("run", args.fmu_dir or Path(loaded.system).parent)
     try:
         result = run_scenario(loaded, out, progress=not args.quiet, algorithm=args.master,
                               plots=not args.no_plots,
@@ -127,6 +128,15 @@ def _cmd_run(args):
 DEFAULT_SCENARIO = "scenarios/s_curve.toml"
 
 
+def _warn_stale_fmus(command, folder):
+    """One line on stderr when the FMUs about to run carry other code than components/."""
+    from orchestrator.builder.system_fmu import stale_fmus_warning
+
+    warning = stale_fmus_warning(command, folder)
+    if warning:
+        print(warning, file=sys.stderr)
+
+
 def _cmd_sweep(args):
     from orchestrator.scenario import apply_overrides
     from orchestrator.sweep import parse_assignment, parse_seeds, sweep
@@ -142,6 +152,7 @@ def _cmd_sweep(args):
         grid[key] = values
     seeds = parse_seeds(args.seeds) if args.seeds is not None else None
     out = Path(args.out) if args.out else Path("runs") / f"sweep_{loaded.name}"
+    _warn_stale_fmus("sweep", args.fmu_dir or Path(loaded.system).parent)
     result = sweep(loaded, grid, out,
                    seeds=seeds, fmu_dir=args.fmu_dir, scheduler=args.scheduler,
                    workers=_workers(args.workers), progress=not args.quiet,

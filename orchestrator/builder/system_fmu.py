@@ -93,3 +93,32 @@ def code_mismatches(fmus, components_dir=COMPONENTS):
             problems.append(f"{path}: carries the code {carried or '(no sonotrack binding)'}, "
                             f"not that of {components_dir} now ({expected})")
     return problems
+
+
+def stale_fmus(folder, components_dir=COMPONENTS):
+    """The FMUs in ``folder`` that sonotrack built from other code than ``components_dir``
+    holds now, one line each (empty when none is).
+
+    Whatever runs FMUs (``run``, ``sweep``, ``reproduce``) gets the answers of the code they
+    carry: FMUs left from an older checkout, not rebuilt after a change, give that code's
+    results under today's name. Only ``<Model>.fmu`` files of our five models with a sonotrack
+    binding are judged (another tool's FMU in the system is not ours to date).
+    """
+    from components import FMU_PACKAGES
+
+    present = {model: (package, Path(folder) / f"{model}.fmu")
+               for model, package in FMU_PACKAGES.items()
+               if (Path(folder) / f"{model}.fmu").is_file()}
+    return [line for line in code_mismatches(present, components_dir)
+            if "(no sonotrack binding)" not in line]
+
+
+def stale_fmus_warning(command, folder, components_dir=COMPONENTS):
+    """One warning line for :func:`stale_fmus` of ``folder``, or None."""
+    stale = stale_fmus(folder, components_dir)
+    if not stale:
+        return None
+    names = ", ".join(line.split(": carries", 1)[0] for line in stale)
+    return (f"sonotrack {command}: warning: {names} carry other code than {components_dir} "
+            "holds now: the results will be those of the code they carry; rebuild them with "
+            "`make fmus` (or `sonotrack build`)")

@@ -44,8 +44,16 @@ def register_cli(subparsers):
 
 
 def _cmd_reproduce(args):
+    import sys
+
+    from orchestrator.builder.fmus import REPO_ROOT
+    from orchestrator.builder.system_fmu import stale_fmus_warning
+
     from .study import reproduce
 
+    warning = stale_fmus_warning("reproduce", args.fmu_dir or REPO_ROOT / "fmus")
+    if warning:
+        print(warning, file=sys.stderr)
     tables = ([t.strip() for t in args.tables.split(",") if t.strip()]
               if args.tables else None)
     report = reproduce(args.out, fmu_dir=args.fmu_dir, workers=args.workers,
