@@ -31,9 +31,10 @@ filtered derivative)::
   :class:`.observer.SpeedObserver` estimates between encoder counts (its model: ``g`` and
   ``tau_a``; its three error poles at that rate), compared with the reference model's speed
   rather than its window average; and the voltage ``g d`` of the disturbance it estimates
-  (a load, friction, another motor constant) is taken away, except while the reference is
-  held at zero (with ``zero_reference_reset``): the observer's disturbance state is then
-  the loop's integral action, and ``integral_gain`` (default 0) would add a second one.
+  (a load, friction, another motor constant) is taken away. The observer's disturbance state
+  is then the loop's integral action (``integral_gain``, default 0, would add a second one);
+  with ``zero_reference_reset`` it is not compensated while the reference is exactly 0 and
+  starts from 0 on the first step after (the integral is emptied and held).
 """
 
 import math
@@ -142,11 +143,18 @@ class DefaultFormLaw:
                 offset = g * self._model_drive(v_ref, h, limit / g)
             else:
                 offset = g * v_ref
-        self.previous_reference = v_ref
         stopped = self.zero_reference_reset and v_ref == 0.0
         if self.observer is not None and not stopped:
-            # the voltage the estimated disturbance takes away (the observer's integral action)
+            if self.zero_reference_reset and self.previous_reference == 0.0:
+                # the first step after a stop starts the observer's integral action afresh,
+                # as the integral is emptied: what it learnt before the stop (a load, friction
+                # in the direction the wheel turned) is not the next start's (a wheel that
+                # spun backwards then drives forwards). Through the stop it keeps estimating,
+                # so that the braking wheel's speed is estimated right.
+                self.observer.disturbance = 0.0
+            # the voltage the estimated disturbance takes away
             offset -= g * self.observer.disturbance
+        self.previous_reference = v_ref
         pd = self.proportional * (kp * error + kd * self.derivative_time * rate)
         ki = self.integral_gain
         if stopped:

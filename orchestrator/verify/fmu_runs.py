@@ -212,7 +212,7 @@ def controller_law_reference(settings, inputs, h):
     tau_a = s["acceleration_feedforward"] if default and s["feedforward"] else 0.0
     observer = (_ObserverReference(g, s["acceleration_feedforward"], s["speed_observer"], h)
                 if default and s.get("speed_observer", 0.0) > 0.0 else None)
-    voltage = 0.0
+    voltage, last_reference = 0.0, None
     out = []
     for v_ref, v_meas in inputs:
         if observer is not None:
@@ -243,6 +243,8 @@ def controller_law_reference(settings, inputs, h):
                 model_speed = a * model_speed + (1 - a) * drive
                 offset = g * drive
             if observer is not None and not (s["zero_reference_reset"] and v_ref == 0.0):
+                if s["zero_reference_reset"] and last_reference == 0.0:
+                    observer.state[2] = 0.0
                 offset -= g * observer.state[2]
             proportional = g * s["gain_scale"] * (kp * error + kd * s["derivative_time"] * rate)
             increment = error * h
@@ -260,6 +262,7 @@ def controller_law_reference(settings, inputs, h):
                 integral = candidate
         raw = offset + proportional + per_integral * integral
         voltage = min(max(raw, -limit), limit)
+        last_reference = v_ref
         out.append((voltage, kp, kd, e_n, de_n))
     return out
 
