@@ -100,6 +100,11 @@ class Analysis:
         """Interval of the mean paired difference a - b of a figure."""
         return paired_difference(self.values(cell_a, key), self.values(cell_b, key))
 
+    def failed_runs(self, cell):
+        """The failed runs of a cell: ``(index, summary)`` of each (summary as the run wrote
+        it: ``error``, ``sim_time_s`` and the figures measured until it failed)."""
+        return [(i, run.summary) for i, run in enumerate(self.study.of(cell)) if not run.ok]
+
     def failures(self):
         """Cells with failed runs: name -> number of failed runs."""
         failed = {}

@@ -23,7 +23,7 @@ from .verdicts import (CONTRADICTED, INCONCLUSIVE, NO_EFFECT, SUPPORTED, WEAKER,
 
 __all__ = ["Judgement", "judge_claim", "Claim", "MECHANISMS", "CONTROL_MECHANISMS",
            "MOTION_MECHANISMS", "ROTATE_MECHANISMS", "MODES_MECHANISMS", "TRACKING_MECHANISMS", "mechanism_figures", "mechanism_text", "paired_at_arrival",
-           "per_run_slopes"]
+           "per_run_slopes", "failure_text", "FAILURE_TEXT"]
 
 
 @dataclass(frozen=True)
@@ -260,6 +260,27 @@ def _shown(value, scale, unit, fmt):
     return "-" if value is None else f"{value * scale:{fmt}} {unit}".strip()
 
 
+# How much of a failed run's error a reason quotes (the report lists every failed run whole).
+FAILURE_TEXT = 110
+
+
+def failure_text(index, summary, kind):
+    """One failed run as a reason shows it: when, why, and (tracking) the smallest gap it had
+    reached by then, which bounds the whole run's from above."""
+    error = str(summary.get("error") or summary.get("status") or "no reason recorded")
+    # "instance X returned fmi2Discard in doStep at t = ...: <the FMU's own message>"
+    error = error.split(": ", 1)[1] if error.startswith("instance ") and ": " in error else error
+    if len(error) > FAILURE_TEXT:
+        error = error[:FAILURE_TEXT].rsplit(" ", 1)[0] + " ..."
+    when = summary.get("sim_time_s")
+    text = f"run {index} failed" + (f" at {float(when):.2f} s" if when is not None else "")
+    text += f" ({error})"
+    gap = summary.get("min_distance_to_source_m")
+    if kind == "tracking" and gap is not None:
+        text += f", smallest gap before it {float(gap):.3f} m"
+    return text
+
+
 def mechanism_text(analysis, cells, kind="control"):
     """The measured mechanisms of the compared cells, the most different first.
 
@@ -293,6 +314,8 @@ def mechanism_text(analysis, cells, kind="control"):
                          + (f", {m['failed']} failed" if m["failed"] else ""))
         elif m["failed"]:
             parts.append(f"{label}: {m['failed']}/{m['runs']} failed")
+        parts += [failure_text(index, summary, kind)
+                  for index, summary in analysis.failed_runs(cells[label])[:2]]
     ranked = []
     for key in keys:
         name, scale, unit, fmt = _SHOWN[key]

@@ -10,6 +10,8 @@ accurately than rotate-then-go" compares each mode against its own plan, and aga
 source's lane, which is neither mode's plan.
 """
 
+import math
+
 from orchestrator.report.document import Verdict
 
 from .claims import Claim, mechanism_text, paired_at_arrival
@@ -29,7 +31,13 @@ def _arm(mode, arm):
 
 
 def _bound(analysis, source, text, condition, cell, key, bound, claimed, why, label):
-    return Claim(source, text, condition, f"{key} per run", analysis.values(cell, key),
+    # a failed run is the worst outcome on the claim's side (-inf for "above", +inf for
+    # "below"), as a lost run is in a paired claim: left out, a run that drove through the
+    # source and then out of the room would leave "the robots do not collide" supported
+    worst = -math.inf if claimed == "above" else math.inf
+    samples = [worst if figures is None else figures.get(key)
+               for figures in analysis.figures(cell)]
+    return Claim(source, text, condition, f"{key} per run", samples,
                  claimed, "m", threshold=bound, margin=0.0, comparator=why,
                  failures=sum(1 for f in analysis.figures(cell) if f is None), cells=(cell,),
                  reason=mechanism_text(analysis, {label: cell}, "tracking"))

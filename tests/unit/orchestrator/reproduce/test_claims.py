@@ -14,11 +14,14 @@ from orchestrator.reproduce.following import BODY_LENGTH, following_figures
 class FakeAnalysis:
     """Per-run figures by cell, as :class:`~orchestrator.reproduce.analysis.Analysis` gives."""
 
-    def __init__(self, cells):
-        self.cells = cells
+    def __init__(self, cells, failed=None):
+        self.cells, self.failed = cells, failed or {}
 
     def figures(self, cell):
         return self.cells[cell]
+
+    def failed_runs(self, cell):
+        return self.failed.get(cell, [])
 
     def values(self, cell, key):
         return [None if f is None else f.get(key) for f in self.cells[cell]]
@@ -143,3 +146,52 @@ def test_a_run_that_never_arrived_is_lost_only_for_figures_read_at_arrival():
     assert samples == [pytest.approx(0.2)] and losses == 0
     failed = FakeAnalysis({"a": [None], "b": [_run(slip=0.1)]})
     assert paired_at_arrival(failed, "a", "b", "slip_time_s") == ([math.inf], 1)
+
+
+# The room's failed run of the full study (straight path, 3 m start, curvature, default form,
+# seed 15): it drove through the stopped source, then out of the room.
+_THROUGH_THE_SOURCE = {
+    "status": "failed", "sim_time_s": 24.61, "min_distance_to_source_m": 0.0899964,
+    "error": "instance localizer returned fmi2Discard in doStep at t = 24.61 s: localizer: at "
+             "t = 24.61 s the robot's microphone M1 is at (1.8645, 6.50425, 0.2) m, outside "
+             "the room (x in [-3.5, 3.5], y in [-0.5, 6.5], z in [0, 2.7] m)"}
+
+
+def _tracking_cell(gaps):
+    return [None if g is None else {"min_gap_m": g, "late_gap_m": 0.56, "lane_rms_m": 0.002,
+                                     "rmse_own_plan_m": 0.0, "slip_time_s": 0.0}
+            for g in gaps]
+
+
+def test_a_failed_run_is_the_worst_outcome_of_a_claim_against_a_bound():
+    from orchestrator.reproduce.tables_tracking import _bound
+
+    gaps = [0.49 + 0.001 * i for i in range(19)] + [None]
+    analysis = FakeAnalysis({"c": _tracking_cell(gaps)}, {"c": [(19, _THROUGH_THE_SOURCE)]})
+    claim = _bound(analysis, "Sec. 6.2.1", "the robots do not collide", "room", "c",
+                   "min_gap_m", BODY_LENGTH, "above", "one body length", "curvature")
+    assert claim.samples[-1] == -math.inf and claim.failures == 1
+    sign = claim.judged.sign_test
+    assert (sign["plus"], sign["minus"]) == (19, 1)
+    # one robot lost against the claim withholds "supported" (verdict rule 6)
+    assert claim.verdict == "inconclusive", claim.requirement()
+    kept = FakeAnalysis({"c": _tracking_cell([0.49 + 0.001 * i for i in range(20)])})
+    assert _bound(kept, "Sec. 6.2.1", "the robots do not collide", "room", "c", "min_gap_m",
+                  BODY_LENGTH, "above", "one body length", "curvature").verdict == "supported"
+    # "below" claims: the failed run is +inf
+    below = _bound(analysis, "Sec. 6.2.1", "keeps up", "room", "c", "late_gap_m", 3.0,
+                   "below", "the starting gap", "curvature")
+    assert below.samples[-1] == math.inf and below.verdict == "inconclusive"
+
+
+def test_a_reason_says_when_and_why_a_run_failed_and_the_gap_it_had_reached():
+    analysis = FakeAnalysis({"c": _tracking_cell([0.49] * 19 + [None])},
+                            {"c": [(19, _THROUGH_THE_SOURCE)]})
+    text = mechanism_text(analysis, {"curvature": "c"}, kind="tracking")
+    assert "curvature: 1/20 failed" in text
+    assert "run 19 failed at 24.61 s (localizer: at t = 24.61 s the robot's microphone M1" in text
+    assert "smallest gap before it 0.090 m" in text
+    assert "instance localizer returned" not in text        # the host's prefix is dropped
+    control = mechanism_text(FakeAnalysis({"a": [None]}, {"a": [(0, {"status": "failed"})]}),
+                             {"CPID": "a"})
+    assert "run 0 failed (failed)" in control and "smallest gap" not in control
