@@ -176,7 +176,9 @@ def documentation_page(model_description, slave_file=None, notes_file=None,
         ["author", root.get("author", "")], ["license", root.get("license", "")],
         ["copyright", root.get("copyright", "")],
         ["generation tool", root.get("generationTool", "")],
-        ["generated", root.get("generationDateAndTime", "")], ["GUID", root.get("guid")],
+        ["generated", root.get("generationDateAndTime",
+                               "not recorded (a reproducible build: the GUID names its code)")],
+        ["GUID", root.get("guid")],
     ])
     experiment = root.find("DefaultExperiment")
     if experiment is not None:

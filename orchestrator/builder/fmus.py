@@ -13,23 +13,27 @@ Then the linux64 binary is replaced by sonotrack's own (:mod:`orchestrator.build
 finally :mod:`orchestrator.builder.documentation` adds the metadata and ``documentation/index.html``.
 """
 
+import datetime
+import hashlib
 import importlib
+import os
 import re
 import shutil
 import sys
 import tempfile
+import uuid
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
 from components import FMU_PACKAGES
 from components.common.errors import BuildError
-from orchestrator.builder.fmi_binary import build_tag, install_binary
+from orchestrator.builder.fmi_binary import build_tag, edit_archive, install_binary
 from orchestrator.builder.documentation import document_fmu
 
 __all__ = [
     "FMU_PACKAGES", "REPO_ROOT", "build_fmu", "build_all", "carried_package", "entry_script",
-    "private_package_name", "write_ssp_archive",
+    "private_package_name", "pin_identity", "write_ssp_archive",
 ]
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -123,6 +127,7 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
             sys.path[:] = saved_path
             _forget_modules(name, private)
     _check_built(Path(fmu_path), name)
+    pin_identity(fmu_path, name, private)
     install_binary(fmu_path, private, name, name)
     if portable:
         from orchestrator.builder.portable import make_portable
@@ -132,6 +137,43 @@ def build_fmu(name, dest_dir, components_dir=COMPONENTS, packages=None, bundle=(
     document_fmu(fmu_path, slave_file,
                  notes_file or components_dir.parent / "docs" / f"{subpackage}.md")
     return Path(fmu_path)
+
+
+# Names the GUIDs of sonotrack's FMUs (uuid5 of this namespace and what the FMU carries).
+GUID_NAMESPACE = uuid.UUID("5f0c1d0e-7a4b-5c3e-9d2f-50a07c0a0001")
+
+
+def pin_identity(fmu_path, name, private):
+    """Make a build reproducible: the same code gives the same FMU, byte for byte.
+
+    pythonfmu writes a time-based GUID (uuid1) and the build time into modelDescription.xml.
+    The GUID becomes a name-based one (uuid5) of the model, its private package (whose tag
+    hashes every source it carries) and the model description itself, so it changes exactly
+    when the FMU's code or interface does; ``generationDateAndTime`` is the time of
+    ``SOURCE_DATE_EPOCH`` if that is set (the reproducible-builds convention) and left out
+    otherwise (the attribute is optional in FMI 2.0). With :func:`edit_archive`'s fixed entry
+    dates and order, a rebuild from unchanged code leaves every stored run's key (the FMUs'
+    SHA-256) unchanged, so a sweep or study resumes instead of computing every run again.
+    """
+    def edit(files):
+        text = files["modelDescription.xml"].decode("utf-8")
+        text = re.sub(r'\s+generationDateAndTime="[^"]*"', "", text, count=1)
+        blank = re.sub(r'guid="[^"]*"', 'guid=""', text, count=1)
+        digest = hashlib.sha256(blank.encode("utf-8")).hexdigest()
+        guid = uuid.uuid5(GUID_NAMESPACE, f"{name}/{private}/{digest}")
+        text = re.sub(r'guid="[^"]*"', f'guid="{guid}"', text, count=1)
+        epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+        if epoch:
+            try:
+                when = datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+            except (ValueError, OverflowError, OSError):
+                raise BuildError(f"SOURCE_DATE_EPOCH = {epoch!r}: must be whole seconds since "
+                                 "1970-01-01 UTC") from None
+            text = text.replace(f'guid="{guid}"', f'guid="{guid}" generationDateAndTime='
+                                f'"{when.strftime("%Y-%m-%dT%H:%M:%SZ")}"', 1)
+        files["modelDescription.xml"] = text.encode("utf-8")
+
+    edit_archive(fmu_path, edit)
 
 
 def _forget_modules(name, private):

@@ -214,8 +214,9 @@ def edit_archive(fmu_path, edit, compresslevel=None):
     """Rewrite the zip atomically: ``edit`` changes a dict of its files (name to bytes) in place.
 
     Every entry is deflated (pythonfmu stores most of them; ``compresslevel`` as zipfile's,
-    default 6); an entry that stays keeps its metadata, a new one is readable by everyone
-    (executable for a library).
+    default 6); an entry that stays keeps its permissions, a new one is readable by everyone
+    (executable for a library). Entries are written in name order and dated 1980-01-01 (zip's
+    earliest date), so that a build from the same code gives the same bytes.
     """
     with zipfile.ZipFile(fmu_path) as archive:
         infos = {info.filename: info for info in archive.infolist()}
@@ -224,14 +225,16 @@ def edit_archive(fmu_path, edit, compresslevel=None):
     with (atomic_open(fmu_path, fsync=False) as stream,
           zipfile.ZipFile(stream, "w", zipfile.ZIP_DEFLATED,
                           compresslevel=compresslevel) as archive):
-        for name, data in files.items():
-            info = infos.get(name)
-            if info is None:
-                info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+        for name in sorted(files):
+            info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+            kept = infos.get(name)
+            if kept is not None:
+                info.external_attr = kept.external_attr
+            else:
                 mode = 0o755 if name.startswith("binaries/") else 0o644
                 info.external_attr = (0o100000 | mode) << 16
             info.compress_type = zipfile.ZIP_DEFLATED
-            archive.writestr(info, data)
+            archive.writestr(info, files[name])
 
 
 def pythonfmu_binary():

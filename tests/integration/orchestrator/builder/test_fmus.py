@@ -7,6 +7,7 @@ from xml.etree import ElementTree
 
 import pytest
 
+from components.common.errors import BuildError
 from orchestrator.builder.fmus import REPO_ROOT, build_fmu
 from orchestrator.fmu.handle import FmuInstance
 from orchestrator.builder.validation import validate_fmu
@@ -117,3 +118,45 @@ def test_several_instances_of_one_fmu_in_one_process(dummy_fmu):
     again.do_step(0.0, 0.25)
     assert again.get_values(["y"])["y"] == 0.5
     again.terminate()
+
+
+
+def _dummy_components(folder):
+    shutil.copytree(REPO_ROOT / "components" / "common", folder / "common")
+    shutil.copytree(Path(__file__).resolve().parents[3] / "support" / "fixtures" / "pipeline" /
+                    "dummy", folder / "dummy")
+    return folder
+
+
+def _build_dummy(components, out):
+    return build_fmu("Dummy", out, components_dir=components, packages={"Dummy": "dummy"})
+
+
+def test_a_build_from_the_same_code_is_the_same_fmu_byte_for_byte(tmp_path, monkeypatch):
+    # pythonfmu writes a time-based GUID and the build time: every rebuild changed every
+    # stored run's key (the FMUs' SHA-256), and a study computed all its runs again
+    import uuid
+
+    monkeypatch.delenv("SOURCE_DATE_EPOCH", raising=False)
+    components = _dummy_components(tmp_path / "components")
+    first = _build_dummy(components, tmp_path / "a")
+    second = _build_dummy(components, tmp_path / "b")
+    assert first.read_bytes() == second.read_bytes()
+    root = _model_description(first)
+    assert uuid.UUID(root.get("guid")).version == 5
+    assert root.get("generationDateAndTime") is None
+    with zipfile.ZipFile(first) as archive:
+        assert {info.date_time for info in archive.infolist()} == {(1980, 1, 1, 0, 0, 0)}
+    # other code, another GUID (and still a valid FMU)
+    slave = components / "dummy" / "fmu.py"
+    slave.write_text(slave.read_text() + "\n# changed\n")
+    changed = _build_dummy(components, tmp_path / "c")
+    assert _model_description(changed).get("guid") != root.get("guid")
+    assert validate_fmu(changed).problems == []
+    # the reproducible-builds convention dates it when asked, and a bad value is named
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1796601600")
+    dated = _model_description(_build_dummy(components, tmp_path / "d"))
+    assert dated.get("generationDateAndTime") == "2026-12-07T00:00:00Z"
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "yesterday")
+    with pytest.raises(BuildError, match="SOURCE_DATE_EPOCH = 'yesterday'"):
+        _build_dummy(components, tmp_path / "e")
