@@ -10,8 +10,9 @@ plots, and compares:
   ``realtime_factor``) and the record of the process that ran it (``process``: its id, host and
   start time differ at every run);
 - every FMU's ``modelDescription.xml``: byte for byte once ``guid`` and
-  ``generationDateAndTime`` are masked (pythonfmu draws a new time-based GUID and stamps the
-  time at every build, so two builds of one commit differ there and nowhere else);
+  ``generationDateAndTime`` are masked (the GUID names the FMU's code, so two revisions
+  whose code differs differ there even where the behaviour does not; builds before commit
+  d19c9b9 also drew a time-based GUID and stamped the build time);
 - ``fmus/SystemStructure.ssd`` as committed, and as the generator writes it now.
 
 A revision is checked out with ``git worktree`` and run with this checkout's virtual
