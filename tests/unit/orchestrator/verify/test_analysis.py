@@ -192,3 +192,34 @@ def test_filter_through_is_the_tfs_response_and_plain_lfilter_is_early():
     # the broken input: lfilter on the unpadded coefficients runs ahead of the TF
     early = lfilter(tf.num[0][0], tf.den[0][0], np.ones(60))
     assert np.max(np.abs(early - expected)) > 1e-3
+
+
+def test_python_controls_fallback_notice_does_not_reach_the_user(model, monkeypatch):
+    # python-control's "best" margins fall back from polynomial roots to the frequency
+    # response on the observer's loops and print a UserWarning (with a source line) into
+    # `sonotrack verify`'s output at every call; that notice is dropped, nothing else is
+    import warnings
+
+    original = control.stability_margins
+
+    def noisy(*args, **kwargs):
+        warnings.warn("stability_margins: Falling back to 'frd' method because of chance of "
+                      "numerical inaccuracy in 'poly' method.", UserWarning, stacklevel=2)
+        return original(*args, **kwargs)
+
+    quiet = analyse_gains(model, 3.0, 0.3)
+    monkeypatch.setattr(control, "stability_margins", noisy)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = analyse_gains(model, 3.0, 0.3)
+    assert [str(w.message) for w in caught] == []
+    assert (result.gain_margin, result.phase_margin_deg) == (quiet.gain_margin,
+                                                             quiet.phase_margin_deg)
+
+    def other(*args, **kwargs):
+        warnings.warn("some other notice", UserWarning, stacklevel=2)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(control, "stability_margins", other)
+    with pytest.warns(UserWarning, match="some other notice"):
+        analyse_gains(model, 3.0, 0.3)
